@@ -1,0 +1,51 @@
+"""Finding and importing an implementation of a stage: the reference, the starter, or a student's folder."""
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import sys
+from pathlib import Path
+from types import ModuleType
+
+from . import KIT_ROOT
+from .errors import KitError
+
+
+def resolve_impl(spec: str | Path, stage: str) -> Path:
+    """'reference', 'starter', or a path (to the stage folder itself or to a folder holding it)."""
+    spec = str(spec)
+    if spec in ("reference", "starter"):
+        root = KIT_ROOT / spec
+    else:
+        root = Path(spec).expanduser()
+        if not root.exists():
+            raise KitError(f"{root}: submission folder not found")
+    root = root.resolve()
+    for candidate in (root / stage, root):
+        if (candidate / "__init__.py").is_file():
+            return candidate
+    raise KitError(f"{root}: no '{stage}' package here (expected {root / stage / '__init__.py'}; "
+                   f"copy starter/{stage}/ and edit it)")
+
+
+def load_impl(folder: Path, stage: str) -> ModuleType:
+    """Import a stage package from a folder under a private name, so two implementations never clash."""
+    digest = hashlib.sha1(str(folder).encode()).hexdigest()[:10]
+    name = f"_cs451_impl_{stage}_{digest}"
+    if name in sys.modules:
+        return sys.modules[name]
+    spec = importlib.util.spec_from_file_location(name, folder / "__init__.py",
+                                                  submodule_search_locations=[str(folder)])
+    if spec is None or spec.loader is None:
+        raise KitError(f"{folder}: cannot import")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    try:
+        spec.loader.exec_module(module)
+    except SyntaxError as err:
+        del sys.modules[name]
+        raise KitError(f"{err.filename}:{err.lineno}: syntax error: {err.msg}") from None
+    except Exception as err:
+        del sys.modules[name]
+        raise KitError(f"{folder}: importing the submission failed: {type(err).__name__}: {err}") from None
+    return module

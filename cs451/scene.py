@@ -1,0 +1,233 @@
+"""Scene files: one JSON format for every stage.
+
+A scene names its image, camera, lights, materials and objects. The same
+Cornell box can be ray traced (stage 2) and solved by radiosity (stage 4).
+Loading validates everything and refuses bad input with the file and the JSON
+path of the field (``scenes/box.json: objects[2].radius: must be > 0, got -1``).
+
+Field defaults follow OpenGL 1.x where OpenGL has one (GL 2.1 spec, table 6.11
+and Mesa's light.c), so the stage-1 sphere reproduces the fixed-function pipeline.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+from . import schema
+from .errors import InputError, KitError
+from .schema import Context, Tagged, Vec3, field
+
+BUNDLED_DIR = Path(__file__).parent / "scenes"
+
+
+@dataclass(frozen=True)
+class Image:
+    width: int = field("Image width in pixels.", 500, schema.positive)
+    height: int = field("Image height in pixels.", 500, schema.positive)
+    background: Vec3 = field("Linear RGB colour where nothing is drawn.", (0.0, 0.0, 0.0), schema.non_negative)
+    exposure: float = field("Linear colours are multiplied by this before encoding.", 1.0, schema.positive)
+    srgb: bool = field("Encode with the sRGB curve when writing 8-bit images (false: write linear values, as OpenGL 1.x did).", False)
+
+
+@dataclass(frozen=True)
+class Camera:
+    eye: Vec3 = field("Eye position (gluLookAt's eye).")
+    center: Vec3 = field("Point looked at (gluLookAt's center).")
+    up: Vec3 = field("Up direction (gluLookAt's up); must not be parallel to the view direction.", (0.0, 1.0, 0.0), schema.nonzero_vector)
+    fovy: float = field("Vertical field of view in degrees (gluPerspective's fovy).", 30.0)
+    near: float = field("Near clipping distance (> 0).", 0.1, schema.positive)
+    far: float = field("Far clipping distance (> near).", 1000.0, schema.positive)
+
+    def validate(self, ctx: Context) -> None:
+        if not 0 < self.fovy < 180:
+            raise ctx.child("fovy").error(f"must lie strictly between 0 and 180 degrees, got {self.fovy}")
+        if self.far <= self.near:
+            raise ctx.child("far").error(f"must be greater than near ({self.near}), got {self.far}")
+        view = [c - e for c, e in zip(self.center, self.eye)]
+        if not any(view):
+            raise ctx.child("center").error("must differ from eye")
+        cross = (view[1] * self.up[2] - view[2] * self.up[1],
+                 view[2] * self.up[0] - view[0] * self.up[2],
+                 view[0] * self.up[1] - view[1] * self.up[0])
+        if max(abs(c) for c in cross) <= 1e-12 * max(abs(v) for v in view) * max(abs(u) for u in self.up):
+            raise ctx.child("up").error("must not be parallel to the view direction (center - eye)")
+
+
+class Light(Tagged, family=True):
+    """A light source; the ``type`` key picks the kind."""
+
+
+@Light.register("point")
+@dataclass(frozen=True)
+class PointLight(Light):
+    position: Vec3 = field("Position of the light.")
+    space: Literal["world", "eye"] = field(
+        "Coordinates of `position`: 'world', or 'eye' for a light fixed to the camera "
+        "(OpenGL's glLightfv under an identity modelview).", "world")
+    ambient: Vec3 = field("Ambient colour (GL_AMBIENT).", (0.0, 0.0, 0.0), schema.non_negative)
+    diffuse: Vec3 = field("Diffuse colour (GL_DIFFUSE); also the intensity for ray tracing.", (1.0, 1.0, 1.0), schema.non_negative)
+    specular: Vec3 = field("Specular colour (GL_SPECULAR).", (1.0, 1.0, 1.0), schema.non_negative)
+    attenuation: Vec3 = field("Constant, linear and quadratic attenuation factors.", (1.0, 0.0, 0.0), schema.non_negative)
+
+    def validate(self, ctx: Context) -> None:
+        if not any(self.attenuation):
+            raise ctx.child("attenuation").error("must not all be zero (the light would be infinitely bright)")
+
+
+@Light.register("directional")
+@dataclass(frozen=True)
+class DirectionalLight(Light):
+    direction: Vec3 = field("Direction the light travels (towards the scene).", check=schema.nonzero_vector)
+    space: Literal["world", "eye"] = field("Coordinates of `direction`.", "world")
+    ambient: Vec3 = field("Ambient colour.", (0.0, 0.0, 0.0), schema.non_negative)
+    diffuse: Vec3 = field("Diffuse colour.", (1.0, 1.0, 1.0), schema.non_negative)
+    specular: Vec3 = field("Specular colour.", (1.0, 1.0, 1.0), schema.non_negative)
+
+
+@Light.register("area")
+@dataclass(frozen=True)
+class AreaLight(Light):
+    corner: Vec3 = field("One corner of the rectangular light.")
+    edge_u: Vec3 = field("First edge vector from the corner.", check=schema.nonzero_vector)
+    edge_v: Vec3 = field("Second edge vector from the corner.", check=schema.nonzero_vector)
+    radiance: Vec3 = field("Emitted radiance (linear RGB).", check=schema.non_negative)
+    samples: int = field("Shadow rays per shading point (ray tracing).", 16, schema.positive)
+
+
+@dataclass(frozen=True)
+class Material:
+    ambient: Vec3 = field("Ambient reflectance (GL_AMBIENT).", (0.2, 0.2, 0.2), schema.non_negative)
+    diffuse: Vec3 = field("Diffuse reflectance (GL_DIFFUSE); the albedo for radiosity.", (0.8, 0.8, 0.8), schema.unit_interval)
+    specular: Vec3 = field("Specular reflectance (GL_SPECULAR).", (0.0, 0.0, 0.0), schema.non_negative)
+    shininess: float = field("Phong exponent (GL_SHININESS, 0..128 in OpenGL).", 0.0, schema.non_negative)
+    emission: Vec3 = field("Emitted colour (GL_EMISSION); the emitted radiosity for stage 4.", (0.0, 0.0, 0.0), schema.non_negative)
+    reflectance: Vec3 = field("Mirror reflectance for ray tracing.", (0.0, 0.0, 0.0), schema.unit_interval)
+    transmittance: Vec3 = field("Transmittance for ray tracing.", (0.0, 0.0, 0.0), schema.unit_interval)
+    ior: float = field("Index of refraction of the inside.", 1.0, schema.positive)
+    fresnel: bool = field("Weight reflection and transmission by Fresnel's equations.", False)
+
+
+class Object(Tagged, family=True):
+    """A geometric object; the ``type`` key picks the kind."""
+
+
+@Object.register("sphere")
+@dataclass(frozen=True)
+class Sphere(Object):
+    radius: float = field("Radius.", check=schema.positive)
+    center: Vec3 = field("Centre.", (0.0, 0.0, 0.0))
+    material: str = field("Name of a material in `materials`.", "default")
+    slices: int = field("Tessellation around the z axis, for rasterising (glutSolidSphere's slices).", 32, schema.at_least(3))
+    stacks: int = field("Tessellation along the z axis, for rasterising (glutSolidSphere's stacks).", 32, schema.at_least(2))
+
+
+@Object.register("plane")
+@dataclass(frozen=True)
+class Plane(Object):
+    point: Vec3 = field("A point on the plane.")
+    normal: Vec3 = field("Normal of the plane.", check=schema.nonzero_vector)
+    material: str = field("Name of a material in `materials`.", "default")
+    checker: float = field("Size of a checkerboard's squares (0: plain).", 0.0, schema.non_negative)
+    checker_material: str = field("Material of the odd squares of the checkerboard.", "default")
+
+
+@Object.register("polygon")
+@dataclass(frozen=True)
+class Polygon(Object):
+    vertices: list[Vec3] = field("Corners of a planar convex polygon, counter-clockwise seen from the front.")
+    material: str = field("Name of a material in `materials`.", "default")
+
+    def validate(self, ctx: Context) -> None:
+        import numpy as np  # local: keeps scene loading cheap for tools that never validate polygons
+        v = np.asarray(self.vertices, dtype=float)
+        if len(v) < 3:
+            raise ctx.child("vertices").error(f"needs at least 3 vertices, got {len(v)}")
+        n = np.zeros(3)
+        for a, b in zip(v, np.roll(v, -1, axis=0)):  # Newell's normal: robust for any planar polygon
+            n += np.cross(a, b)
+        scale = max(float(np.ptp(v, axis=0).max()), 1e-300)
+        if np.linalg.norm(n) <= 1e-12 * scale * scale:
+            raise ctx.child("vertices").error("degenerate polygon (zero area: repeated or collinear vertices)")
+
+
+@Object.register("mesh")
+@dataclass(frozen=True)
+class Mesh(Object):
+    file: str = field("OBJ file, relative to the scene file.")
+    material: str = field("Name of a material in `materials`.", "default")
+    scale: float = field("Uniform scale applied to the mesh.", 1.0, schema.positive)
+    translate: Vec3 = field("Translation applied after scaling.", (0.0, 0.0, 0.0))
+
+
+@dataclass(frozen=True)
+class Scene:
+    camera: Camera = field("The viewpoint.")
+    name: str = field("Short name.", "")
+    description: str = field("One line about the scene.", "")
+    image: Image = field("Output image settings.", Image())
+    ambient: Vec3 = field("Global ambient light (GL_LIGHT_MODEL_AMBIENT).", (0.2, 0.2, 0.2), schema.non_negative)
+    lights: list[Light] = field("Light sources.", [])
+    materials: dict[str, Material] = field("Materials by name; 'default' exists unless redefined.", {})
+    objects: list[Object] = field("Geometry.", [])
+    options: dict[str, dict[str, Any]] = field("Per-stage options, e.g. {\"sphere\": {\"shading\": \"phong\"}}; each stage validates its own.", {})
+    source: str = field("Where the scene was loaded from (set by the loader).", "")
+
+    def validate(self, ctx: Context) -> None:
+        known = set(self.materials) | {"default"}
+        for i, obj in enumerate(self.objects):
+            for key in ("material", "checker_material"):
+                name = getattr(obj, key, None)
+                if name is not None and name not in known:
+                    raise ctx.child("objects").child(i).child(key).error(
+                        f"unknown material {name!r} (defined: {', '.join(sorted(known))})")
+
+    def material(self, name: str) -> Material:
+        return self.materials.get(name, Material())
+
+
+def bundled_scenes() -> list[str]:
+    """Names of the scenes shipped with the kit."""
+    return sorted(p.stem for p in BUNDLED_DIR.glob("*.json"))
+
+
+def resolve_scene_path(name_or_path: str | Path) -> Path:
+    """A bundled scene name (``sphere``) or a path to a JSON file."""
+    p = Path(name_or_path)
+    if p.suffix == ".json" or p.exists():
+        if not p.exists():
+            raise KitError(f"{p}: scene file not found")
+        return p
+    bundled = BUNDLED_DIR / f"{name_or_path}.json"
+    if bundled.exists():
+        return bundled
+    raise KitError(f"unknown scene {str(name_or_path)!r}: not a file, and not a bundled scene "
+                   f"(bundled: {', '.join(bundled_scenes())})")
+
+
+def load_scene(name_or_path: str | Path) -> Scene:
+    """Load and validate a scene; raises InputError naming the file and field on bad input."""
+    path = resolve_scene_path(name_or_path)
+    label = str(path) if path.parent != BUNDLED_DIR else f"{path.stem} (bundled scene {path.name})"
+    try:
+        data = json.loads(path.read_text(), parse_constant=_refuse_constant)
+    except json.JSONDecodeError as err:
+        raise InputError(label, f"line {err.lineno} column {err.colno}", f"invalid JSON: {err.msg}") from None
+    except ValueError as err:
+        raise InputError(label, "", str(err)) from None
+    return parse_scene(data, label, source=str(path))
+
+
+def parse_scene(data: Any, label: str = "<scene>", source: str = "") -> Scene:
+    """Validate a scene given as a JSON-like dict (Mitsuba-style: scenes are plain dicts too)."""
+    if isinstance(data, dict) and "source" in data:
+        raise InputError(label, "source", "unknown field (set by the loader, not by the file)")
+    scene = schema.parse_record(Scene, data, Context(label))
+    object.__setattr__(scene, "source", source)
+    return scene
+
+
+def _refuse_constant(name: str) -> Any:
+    # json accepts NaN and Infinity by default; a scene must never carry them
+    raise ValueError(f"{name} is not allowed in a scene file (use finite numbers)")

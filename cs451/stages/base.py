@@ -1,0 +1,98 @@
+"""What a stage is: its tasks (the functions a submission provides), its renderer and its probes.
+
+A stage's interface is declared once, here and in the stage's module; the CLI,
+the autograder and the demos reach student code only through it.
+"""
+from __future__ import annotations
+
+import inspect
+from dataclasses import dataclass, field
+from types import ModuleType
+from typing import Any, Callable
+
+import numpy as np
+
+from ..errors import KitError
+
+
+@dataclass(frozen=True)
+class Task:
+    """One thing the student writes, with the stable ID used in the handout, the code, the tests and the rubric."""
+    id: str             # "S1"
+    function: str       # the name the submission must define
+    title: str          # "Perspective projection"
+    params: tuple[str, ...]  # expected parameter names, checked when a submission loads
+
+
+@dataclass(frozen=True)
+class Stage:
+    name: str                 # "sphere": CLI name and folder under reference/ and starter/
+    number: int
+    title: str
+    handout: str              # folder under assignments/
+    tasks: tuple[Task, ...]
+    render: Callable[..., Any]          # render(scene, impl, size=None, **opts) -> float image (h, w, 3)
+    probes: dict[str, Callable[..., dict[str, np.ndarray]]] = field(default_factory=dict)
+
+    def task(self, task_id: str) -> Task:
+        for t in self.tasks:
+            if t.id == task_id:
+                return t
+        raise KeyError(task_id)
+
+    def handout_link(self, task: Task) -> str:
+        anchor = f"{task.id}-{task.title}".lower().replace(" ", "-")
+        anchor = "".join(c for c in anchor if c.isalnum() or c == "-")
+        return f"assignments/{self.handout}/README.md#{anchor}"
+
+
+def check_interface(stage: Stage, module: ModuleType) -> list[str]:
+    """Problems with a submission's interface: missing functions or wrong parameter names."""
+    problems = []
+    for task in stage.tasks:
+        fn = getattr(module, task.function, None)
+        if fn is None:
+            problems.append(f"{task.id}: missing function {task.function}()")
+            continue
+        if not callable(fn):
+            problems.append(f"{task.id}: {task.function} is not a function")
+            continue
+        try:
+            names = tuple(p.name for p in inspect.signature(fn).parameters.values())
+        except (TypeError, ValueError):
+            continue
+        if names != task.params:
+            problems.append(f"{task.id}: {task.function}({', '.join(names)}) should take ({', '.join(task.params)})")
+    return problems
+
+
+def student_call(stage: Stage, module: Any, task_id: str, *args: Any) -> Any:
+    """Call a task's function, turning an unimplemented stub into a one-line KitError."""
+    task = stage.task(task_id)
+    fn = getattr(module, task.function, None)
+    if fn is None:
+        raise KitError(f"{task.id} {task.function}() is missing from the submission")
+    try:
+        return fn(*args)
+    except NotImplementedError as err:
+        raise KitError(f"{task.id} {task.function}() is not implemented yet ({err or 'see ' + stage.handout_link(task)})") from None
+
+
+def as_array(value: Any, shape: tuple[int | None, ...], what: str, kind: str = "f") -> np.ndarray:
+    """Check a student's result: array-like, of this shape (None = any length), finite; else a KitError."""
+    try:
+        arr = np.asarray(value, dtype=np.float64 if kind == "f" else None)
+    except (TypeError, ValueError) as err:
+        raise KitError(f"{what} returned something that is not an array ({type(value).__name__}: {err})") from None
+    if arr.ndim != len(shape) or any(s is not None and s != a for s, a in zip(shape, arr.shape)):
+        want = "(" + ", ".join("n" if s is None else str(s) for s in shape) + ")"
+        raise KitError(f"{what} returned shape {arr.shape}, expected {want}")
+    if kind == "i":
+        if arr.dtype.kind not in "iu":
+            if arr.dtype.kind == "f" and np.isfinite(arr).all() and np.all(arr == np.round(arr)):
+                arr = arr.astype(np.int64)
+            else:
+                raise KitError(f"{what} returned {arr.dtype} values, expected integers")
+    elif not np.isfinite(arr).all():
+        raise KitError(f"{what} returned NaN or infinite values")
+    return arr

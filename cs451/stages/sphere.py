@@ -1,0 +1,293 @@
+"""Stage 1, the lit sphere: its interface, and the scaffolding that draws with a student's functions.
+
+The scaffolding holds no solution. It carries over two ideas of the original
+GLUT program: the display list becomes GPU buffers built once (``SphereRenderer``),
+and the fixed-function state becomes uniforms declared in ``GLSL_INTERFACE``.
+Everything a student writes (matrices, mesh, shaders, reshape, keys) is called
+through :data:`STAGE`, or replaced by trusted inputs ``given`` by the autograder.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+
+from .. import schema
+from ..errors import KitError
+from ..gl import create_context
+from ..scene import Camera, DirectionalLight, PointLight, Scene, Sphere, parse_scene
+from ..schema import Context, field
+from .base import Stage, Task, as_array, student_call
+
+MAX_LIGHTS = 8
+
+#: Put in front of every student shader: the version line, and the uniforms and inputs the kit sets.
+GLSL_INTERFACE = f"""#version 330
+#define MAX_LIGHTS {MAX_LIGHTS}
+uniform mat4 u_model_view;      // object to eye space
+uniform mat4 u_projection;      // eye to clip space
+uniform mat3 u_normal_matrix;   // inverse transpose of u_model_view's upper 3x3
+uniform int u_num_lights;
+uniform vec4 u_light_position[MAX_LIGHTS];    // eye space; w = 0 for a directional light (towards the light)
+uniform vec3 u_light_ambient[MAX_LIGHTS];
+uniform vec3 u_light_diffuse[MAX_LIGHTS];
+uniform vec3 u_light_specular[MAX_LIGHTS];
+uniform vec3 u_light_attenuation[MAX_LIGHTS]; // constant, linear, quadratic
+uniform vec3 u_global_ambient;
+uniform vec3 u_mat_ambient;
+uniform vec3 u_mat_diffuse;
+uniform vec3 u_mat_specular;
+uniform vec3 u_mat_emission;
+uniform float u_mat_shininess;
+uniform bool u_local_viewer;
+"""
+VERTEX_INPUTS = "in vec3 in_position;  // object space\nin vec3 in_normal;\n"
+FRAGMENT_OUTPUT = "out vec4 frag_color;\n"
+
+TASKS = (
+    Task("S1", "perspective", "Perspective projection", ("fovy", "aspect", "near", "far")),
+    Task("S2", "look_at", "The look-at view matrix", ("eye", "center", "up")),
+    Task("S3", "sphere_mesh", "The sphere mesh", ("radius", "slices", "stacks")),
+    Task("S4", "gouraud_shaders", "Gouraud shading", ()),
+    Task("S5", "phong_shaders", "Phong shading", ()),
+    Task("S6", "reshape", "Resizing the window", ("width", "height", "camera")),
+    Task("S7", "handle_key", "Keyboard controls", ("key", "state")),
+)
+
+
+@dataclass(frozen=True)
+class ViewState:
+    """What the keyboard changes in the viewer (S7)."""
+    running: bool = True
+    shading: Literal["gouraud", "phong"] = "gouraud"
+    slices: int = 32
+    stacks: int = 32
+
+
+@dataclass(frozen=True)
+class SphereOptions:
+    shading: Literal["gouraud", "phong"] = field("Gouraud (per-vertex lighting, as the original) or Phong (per-fragment).", "gouraud")
+    local_viewer: bool = field("GL_LIGHT_MODEL_LOCAL_VIEWER: the specular half-vector uses the direction to the eye.", True)
+
+
+def options(scene: Scene) -> SphereOptions:
+    return schema.parse_record(SphereOptions, scene.options.get("sphere", {}),
+                               Context(scene.source or scene.name or "<scene>", "options.sphere"))
+
+
+def spheres(scene: Scene) -> list[Sphere]:
+    found = [o for o in scene.objects if isinstance(o, Sphere)]
+    if not found:
+        raise KitError(f"{scene.source or scene.name}: objects: stage 1 draws spheres, and this scene has none")
+    return found
+
+
+# --- calling the student's functions, with checks on what they return --------
+
+def _perspective(impl: Any, fovy: float, aspect: float, near: float, far: float) -> np.ndarray:
+    return as_array(student_call(STAGE, impl, "S1", fovy, aspect, near, far), (4, 4), "S1 perspective()")
+
+
+def _look_at(impl: Any, eye: Any, center: Any, up: Any) -> np.ndarray:
+    return as_array(student_call(STAGE, impl, "S2", np.array(eye, float), np.array(center, float), np.array(up, float)),
+                    (4, 4), "S2 look_at()")
+
+
+def _mesh(impl: Any, radius: float, slices: int, stacks: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    out = student_call(STAGE, impl, "S3", radius, slices, stacks)
+    if not isinstance(out, (tuple, list)) or len(out) != 3:
+        raise KitError("S3 sphere_mesh() must return (positions, normals, triangles)")
+    positions = as_array(out[0], (None, 3), "S3 sphere_mesh() positions")
+    normals = as_array(out[1], (len(positions), 3), "S3 sphere_mesh() normals")
+    triangles = as_array(out[2], (None, 3), "S3 sphere_mesh() triangles", kind="i")
+    if len(triangles) and (triangles.min() < 0 or triangles.max() >= len(positions)):
+        raise KitError(f"S3 sphere_mesh() triangles index vertex {int(triangles.max())} of {len(positions)}")
+    return positions, normals, triangles
+
+
+def _shaders(impl: Any, shading: str) -> tuple[str, str]:
+    task = "S4" if shading == "gouraud" else "S5"
+    out = student_call(STAGE, impl, task)
+    if not isinstance(out, (tuple, list)) or len(out) != 2 or not all(isinstance(s, str) for s in out):
+        raise KitError(f"{task} {STAGE.task(task).function}() must return (vertex_source, fragment_source) strings")
+    return out[0], out[1]
+
+
+def _reshape(impl: Any, width: int, height: int, camera: Camera) -> tuple[tuple[int, int, int, int], np.ndarray]:
+    out = student_call(STAGE, impl, "S6", width, height, camera)
+    if not isinstance(out, (tuple, list)) or len(out) != 2:
+        raise KitError("S6 reshape() must return (viewport, projection)")
+    viewport = as_array(out[0], (4,), "S6 reshape() viewport", kind="i")
+    return tuple(int(v) for v in viewport), as_array(out[1], (4, 4), "S6 reshape() projection")  # type: ignore[return-value]
+
+
+# --- drawing ----------------------------------------------------------------
+
+def _light_uniforms(scene: Scene, view: np.ndarray) -> dict[str, np.ndarray]:
+    lights = [l for l in scene.lights if isinstance(l, (PointLight, DirectionalLight))]
+    if len(lights) > MAX_LIGHTS:
+        raise KitError(f"{scene.source}: lights: stage 1 supports at most {MAX_LIGHTS} lights (OpenGL 1.x's GL_LIGHT0..7)")
+    pos = np.zeros((MAX_LIGHTS, 4))
+    amb, dif, spe = (np.zeros((MAX_LIGHTS, 3)) for _ in range(3))
+    att = np.tile([1.0, 0.0, 0.0], (MAX_LIGHTS, 1))
+    for i, light in enumerate(lights):
+        if isinstance(light, PointLight):
+            p = np.array([*light.position, 1.0])
+            att[i] = light.attenuation
+        else:
+            p = np.array([*(-np.asarray(light.direction)), 0.0])  # GL stores the direction towards the light
+        pos[i] = p if light.space == "eye" else view @ p
+        amb[i], dif[i], spe[i] = light.ambient, light.diffuse, light.specular
+    return {"u_num_lights": np.array(len(lights)), "u_light_position": pos, "u_light_ambient": amb,
+            "u_light_diffuse": dif, "u_light_specular": spe, "u_light_attenuation": att}
+
+
+class SphereRenderer:
+    """Buffers built once, drawn every frame: the display list of the original program, in modern OpenGL."""
+
+    def __init__(self, ctx: Any, shaders: tuple[str, str], meshes: list[tuple[np.ndarray, np.ndarray, np.ndarray]],
+                 task: str = "S4"):
+        self.ctx = ctx
+        vs, fs = shaders
+        try:
+            self.program = ctx.program(vertex_shader=GLSL_INTERFACE + VERTEX_INPUTS + vs,
+                                       fragment_shader=GLSL_INTERFACE + FRAGMENT_OUTPUT + fs)
+        except Exception as err:  # moderngl reports compile and link errors as plain Exceptions
+            first = next((ln for ln in str(err).splitlines() if "error" in ln.lower()), str(err).strip().splitlines()[0])
+            raise KitError(f"{task}: shader does not compile: {first.strip()}") from None
+        self.vaos = []
+        for positions, normals, triangles in meshes:
+            vbo = ctx.buffer(np.hstack([positions, normals]).astype("f4").tobytes())
+            ibo = ctx.buffer(triangles.astype("i4").tobytes())
+            attributes = [name for name in ("in_position", "in_normal") if name in self.program]
+            layout = " ".join("3f" if n in attributes else "3x4" for n in ("in_position", "in_normal"))
+            self.vaos.append(ctx.vertex_array(self.program, [(vbo, layout, *attributes)], ibo))
+
+    def _set(self, name: str, value: Any) -> None:
+        if name in self.program:  # the GLSL compiler drops uniforms a shader does not use
+            self.program[name].write(np.asarray(value, dtype="i4" if name == "u_num_lights" else "f4").tobytes())
+
+    def draw(self, scene: Scene, view: np.ndarray, projection: np.ndarray, local_viewer: bool) -> None:
+        ctx = self.ctx
+        ctx.enable(ctx.DEPTH_TEST)
+        ctx.clear(*scene.image.background, 1.0, depth=1.0)
+        for name, value in _light_uniforms(scene, view).items():
+            self._set(name, value)
+        self._set("u_projection", projection.T)
+        self._set("u_global_ambient", scene.ambient)
+        if "u_local_viewer" in self.program:
+            self.program["u_local_viewer"].value = bool(local_viewer)
+        for vao, sphere in zip(self.vaos, spheres(scene)):
+            model = np.eye(4)
+            model[:3, 3] = sphere.center
+            model_view = view @ model
+            m = scene.material(sphere.material)
+            self._set("u_model_view", model_view.T)
+            self._set("u_normal_matrix", np.linalg.inv(model_view[:3, :3]))  # (M^-1)^T, transposed for GL
+            self._set("u_mat_ambient", m.ambient)
+            self._set("u_mat_diffuse", m.diffuse)
+            self._set("u_mat_specular", m.specular)
+            self._set("u_mat_emission", m.emission)
+            self._set("u_mat_shininess", m.shininess)
+            vao.render()
+
+
+def _read_pixels(fbo: Any, width: int, height: int) -> np.ndarray:
+    data = np.frombuffer(fbo.read(components=3, alignment=1), dtype=np.uint8).reshape(height, width, 3)
+    return np.flipud(data).astype(np.float64) / 255.0
+
+
+def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, shading: str | None = None,
+           given: dict[str, Any] | None = None, ctx: Any = None) -> np.ndarray:
+    """Render a stage-1 scene with a student's functions; ``given`` replaces some of them with trusted values.
+
+    ``given`` may hold ``viewport``, ``projection``, ``view`` and ``mesh0``, ``mesh1``… (one per sphere).
+    Returns a linear float image (h, w, 3) in [0, 1], 8 bits deep as the original window.
+    """
+    given = given or {}
+    opts = options(scene)
+    shading = shading or opts.shading
+    width, height = size or (scene.image.width, scene.image.height)
+    cam = scene.camera
+    if "projection" in given:
+        viewport, projection = given["viewport"], given["projection"]
+    else:
+        viewport, projection = _reshape(impl, width, height, cam)
+    view = given["view"] if "view" in given else _look_at(impl, cam.eye, cam.center, cam.up)
+    meshes = [given.get(f"mesh{i}") or _mesh(impl, s.radius, s.slices, s.stacks) for i, s in enumerate(spheres(scene))]
+    shaders = _shaders(impl, shading)
+    ctx = ctx or create_context()
+    fbo = ctx.framebuffer(color_attachments=[ctx.renderbuffer((width, height), 4)],
+                          depth_attachment=ctx.depth_renderbuffer((width, height)))
+    fbo.use()
+    ctx.viewport = tuple(int(v) for v in viewport)
+    renderer = SphereRenderer(ctx, shaders, meshes, task="S4" if shading == "gouraud" else "S5")
+    renderer.draw(scene, view, projection, opts.local_viewer)
+    ctx.finish()
+    return _read_pixels(fbo, width, height)
+
+
+# --- probes: what the autograder's worker asks a submission for ------------------
+
+def probe_perspective(impl: Any, fovy: float, aspect: float, near: float, far: float) -> dict[str, np.ndarray]:
+    return {"matrix": _perspective(impl, fovy, aspect, near, far)}
+
+
+def probe_look_at(impl: Any, eye: list, center: list, up: list) -> dict[str, np.ndarray]:
+    return {"matrix": _look_at(impl, eye, center, up)}
+
+
+def probe_sphere_mesh(impl: Any, radius: float, slices: int, stacks: int) -> dict[str, np.ndarray]:
+    positions, normals, triangles = _mesh(impl, radius, slices, stacks)
+    return {"positions": positions, "normals": normals, "triangles": triangles}
+
+
+def probe_reshape(impl: Any, width: int, height: int, camera: dict) -> dict[str, np.ndarray]:
+    cam = schema.parse_record(Camera, camera, Context("<probe>", "camera"))
+    viewport, projection = _reshape(impl, width, height, cam)
+    return {"viewport": np.array(viewport), "projection": projection}
+
+
+def probe_handle_key(impl: Any, key: str, state: dict) -> dict[str, np.ndarray]:
+    out = student_call(STAGE, impl, "S7", key, ViewState(**state))
+    if not isinstance(out, ViewState):
+        raise KitError(f"S7 handle_key() must return a ViewState, got {type(out).__name__}")
+    return {"running": np.array(out.running), "shading": np.array(out.shading),
+            "slices": np.array(out.slices), "stacks": np.array(out.stacks)}
+
+
+def probe_parts(impl: Any, scene: dict, size: list[int]) -> dict[str, np.ndarray]:
+    """Everything but the shaders: what the autograder feeds as trusted inputs to a shader test."""
+    sc = parse_scene(scene, "<probe scene>")
+    viewport, projection = _reshape(impl, size[0], size[1], sc.camera)
+    cam = sc.camera
+    out = {"viewport": np.array(viewport), "projection": projection, "view": _look_at(impl, cam.eye, cam.center, cam.up)}
+    for i, s in enumerate(spheres(sc)):
+        for key, arr in zip(("positions", "normals", "triangles"), _mesh(impl, s.radius, s.slices, s.stacks)):
+            out[f"mesh{i}_{key}"] = arr
+    return out
+
+
+def probe_render(impl: Any, scene: dict, size: list[int], shading: str | None = None,
+                 **given_arrays: np.ndarray) -> dict[str, np.ndarray]:
+    """Render ``scene``; the trusted parts arrive as arrays named as :func:`probe_parts` returns them."""
+    given: dict[str, Any] = {}
+    if "projection" in given_arrays:
+        given["projection"] = given_arrays["projection"]
+        given["viewport"] = tuple(int(v) for v in given_arrays["viewport"])
+    if "view" in given_arrays:
+        given["view"] = given_arrays["view"]
+    i = 0
+    while f"mesh{i}_positions" in given_arrays:
+        given[f"mesh{i}"] = tuple(given_arrays[f"mesh{i}_{k}"] for k in ("positions", "normals", "triangles"))
+        i += 1
+    sc = parse_scene(scene, "<probe scene>")
+    return {"image": render(sc, impl, tuple(size), shading=shading, given=given)}  # type: ignore[arg-type]
+
+
+STAGE = Stage(
+    name="sphere", number=1, title="The lit sphere", handout="01-sphere", tasks=TASKS, render=render,
+    probes={"perspective": probe_perspective, "look_at": probe_look_at, "sphere_mesh": probe_sphere_mesh,
+            "reshape": probe_reshape, "handle_key": probe_handle_key, "parts": probe_parts, "render": probe_render},
+)
