@@ -17,9 +17,12 @@ class Progress:
         self.start = time.perf_counter()
         self.done = 0
         self.shown = False
+        self.live = hasattr(self.stream, "isatty") and self.stream.isatty()  # no carriage-return noise in logs
 
     def advance(self, n: int = 1, note: str = "") -> None:
         self.done += n
+        if not self.live:
+            return
         elapsed = time.perf_counter() - self.start
         if elapsed < self.delay and self.done < self.total:
             return

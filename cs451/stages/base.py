@@ -75,7 +75,8 @@ def student_call(stage: Stage, module: Any, task_id: str, *args: Any) -> Any:
     try:
         return fn(*args)
     except NotImplementedError as err:
-        raise KitError(f"{task.id} {task.function}() is not implemented yet ({err or 'see ' + stage.handout_link(task)})") from None
+        hint = str(err).removeprefix(f"{task.id}: ") or f"see {stage.handout_link(task)}"
+        raise KitError(f"{task.id} {task.function}() is not implemented yet: {hint}") from None
 
 
 def as_array(value: Any, shape: tuple[int | None, ...], what: str, kind: str = "f") -> np.ndarray:

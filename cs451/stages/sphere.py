@@ -249,16 +249,23 @@ def probe_reshape(impl: Any, width: int, height: int, camera: dict) -> dict[str,
     return {"viewport": np.array(viewport), "projection": projection}
 
 
-def probe_handle_key(impl: Any, key: str, state: dict) -> dict[str, np.ndarray]:
-    out = student_call(STAGE, impl, "S7", key, ViewState(**state))
-    if not isinstance(out, ViewState):
-        raise KitError(f"S7 handle_key() must return a ViewState, got {type(out).__name__}")
-    return {"running": np.array(out.running), "shading": np.array(out.shading),
-            "slices": np.array(out.slices), "stacks": np.array(out.stacks)}
+def probe_handle_key(impl: Any, presses: list[tuple[str, dict]]) -> dict[str, np.ndarray]:
+    """The state after each (key, state) press, as parallel arrays."""
+    states = []
+    for key, state in presses:
+        out = student_call(STAGE, impl, "S7", key, ViewState(**state))
+        if not isinstance(out, ViewState):
+            raise KitError(f"S7 handle_key() must return a ViewState, got {type(out).__name__}")
+        states.append(out)
+    return {"running": np.array([s.running for s in states]), "shading": np.array([s.shading for s in states]),
+            "slices": np.array([s.slices for s in states]), "stacks": np.array([s.stacks for s in states])}
 
 
-def probe_parts(impl: Any, scene: dict, size: list[int]) -> dict[str, np.ndarray]:
-    """Everything but the shaders: what the autograder feeds as trusted inputs to a shader test."""
+def probe_parts(impl: Any, scene: dict, size: list[int], shading: str | None = None) -> dict[str, np.ndarray]:
+    """Everything but the shaders: what the autograder feeds as trusted inputs to a shader test.
+
+    Takes the render probe's parameters; ``shading`` does not change the parts.
+    """
     sc = parse_scene(scene, "<probe scene>")
     viewport, projection = _reshape(impl, size[0], size[1], sc.camera)
     cam = sc.camera

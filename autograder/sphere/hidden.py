@@ -1,0 +1,40 @@
+"""Stage 1 hidden tests: other sizes, materials and lights than the handout shows. Not shipped to students."""
+from __future__ import annotations
+
+from autograder.sphere.public import (START, SPHERE_SCENE, keys_test, look_at_test, mesh_test, perspective_test,
+                                      reshape_test, scene_variant, shader_test)
+
+SHINY_RED = scene_variant(
+    materials={"red": {"ambient": [0.3, 0.05, 0.05], "diffuse": [0.8, 0.1, 0.1], "specular": [0.9, 0.9, 0.9],
+                       "shininess": 12, "emission": [0.05, 0.0, 0.0]}},
+    objects=[{"type": "sphere", "radius": 1, "material": "red", "slices": 24, "stacks": 18}])
+
+TWO_LIGHTS = scene_variant(
+    ambient=[0.05, 0.05, 0.1],
+    lights=[{"type": "point", "position": [-4, 3, 2], "diffuse": [0.2, 0.4, 1.0], "specular": [1, 1, 1],
+             "attenuation": [0.5, 0.05, 0.01]},
+            {"type": "directional", "direction": [1, -0.5, -0.3], "diffuse": [1.0, 0.7, 0.3], "specular": [0.5, 0.5, 0.5],
+             "ambient": [0.1, 0.1, 0.1]}],
+    materials={"white": {"diffuse": [0.9, 0.9, 0.9], "specular": [0.6, 0.6, 0.6], "shininess": 80}},
+    objects=[{"type": "sphere", "radius": 1, "material": "white"},
+             {"type": "sphere", "radius": 0.5, "center": [1.4, 0.6, -1], "material": "white", "slices": 16, "stacks": 12}])
+
+FAR_VIEWER = scene_variant(
+    camera={"eye": [2, 3, 7], "center": [0, 0, 0], "up": [0, 1, 0], "fovy": 35, "near": 1, "far": 50},
+    options={"sphere": {"local_viewer": False}},
+    materials={"green": {"diffuse": [0.3, 0.9, 0.5], "specular": [0.7, 0.7, 0.7], "shininess": 30}})
+
+TESTS = [
+    perspective_test("S1 perspective: narrow, tall window", 4, hidden=True, fovy=12.5, aspect=0.4, near=0.01, far=1e4),
+    look_at_test("S2 look_at: looking down with a tilted up vector", 4, hidden=True,
+                 eye=[0, 10, 0.1], center=[0, 0, 0], up=[1, 1, 0]),
+    mesh_test("S3 sphere_mesh: radius 0.5, 50 slices, 3 stacks", 6, hidden=True, radius=0.5, slices=50, stacks=3),
+    shader_test("S4 Gouraud: shiny red sphere with emission, 256×256", "S4", 5, SHINY_RED, (256, 256), hidden=True),
+    shader_test("S4 Gouraud: two lights, attenuation, two spheres, 200×400", "S4", 5, TWO_LIGHTS, (200, 400), hidden=True),
+    shader_test("S5 Phong: shiny red sphere, 256×256", "S5", 4, SHINY_RED, (256, 256), hidden=True),
+    shader_test("S5 Phong: infinite viewer, oblique camera, 300×200", "S5", 3, FAR_VIEWER, (300, 200), hidden=True),
+    reshape_test("S6 reshape: a minimised window (height 0)", 4, hidden=True, width=640, height=0),
+    keys_test("S7 handle_key: Q, escape, + and - within their limits", 5, hidden=True, presses=[
+        ["Q", START], ["escape", {**START, "shading": "phong"}], ["+", START], ["+", {**START, "slices": 200, "stacks": 256}],
+        ["-", START], ["-", {**START, "slices": 5, "stacks": 4}]]),
+]

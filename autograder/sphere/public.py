@@ -1,0 +1,80 @@
+"""Stage 1 public tests: students run these with ``cs451 grade sphere``.
+
+Points per task (the rubric in assignments/01-sphere/README.md):
+S1 10, S2 10, S3 20, S4 25, S5 15, S6 10, S7 10; hidden.py holds the rest of each task's points.
+"""
+from __future__ import annotations
+
+import copy
+import json
+
+from cs451.compare import ImageTolerance
+from cs451.grading.checks import all_of, array_close, image_matches
+from cs451.grading.spec import Test
+from cs451.scene import BUNDLED_DIR
+
+from autograder.sphere import truth
+
+#: Tolerance of the image tests: measured margin in assignments/01-sphere/README.md ("Tolerances").
+IMAGE = ImageTolerance(threshold=0.016, max_bad_fraction=0.01, shift=1)
+MATRIX_TOL = "entries within 1e-6 relative, 1e-9 absolute"
+
+SPHERE_SCENE = json.loads((BUNDLED_DIR / "sphere.json").read_text())
+
+
+def scene_variant(**changes) -> dict:
+    """The handout's scene with top-level fields replaced (a deep copy)."""
+    scene = copy.deepcopy(SPHERE_SCENE)
+    scene.update(copy.deepcopy(changes))
+    return scene
+
+
+def perspective_test(name, points, hidden=False, **params) -> Test:
+    return Test(name, "S1", points, "perspective", params, array_close("matrix", truth.perspective, what="the matrix"),
+                MATRIX_TOL, expected="none", hidden=hidden)
+
+
+def look_at_test(name, points, hidden=False, **params) -> Test:
+    return Test(name, "S2", points, "look_at", params, array_close("matrix", truth.look_at, what="the matrix"),
+                MATRIX_TOL, expected="none", hidden=hidden)
+
+
+def mesh_test(name, points, hidden=False, **params) -> Test:
+    return Test(name, "S3", points, "sphere_mesh", params, all_of(truth.mesh_checks()),
+                "positions within 1e-6·radius of freeglut's; normals unit within 1e-5", expected="none", hidden=hidden)
+
+
+def shader_test(name, task, points, scene, size, hidden=False) -> Test:
+    shading = "gouraud" if task == "S4" else "phong"
+    return Test(name, task, points, "render", {"scene": scene, "size": list(size), "shading": shading},
+                image_matches(IMAGE), IMAGE.describe(), given="parts", hidden=hidden)
+
+
+def reshape_test(name, points, hidden=False, **params) -> Test:
+    params.setdefault("camera", SPHERE_SCENE["camera"])
+    return Test(name, "S6", points, "reshape", params, all_of(truth.reshape_checks()),
+                "viewport exact; aspect and field of view within 1e-6 relative", expected="none", hidden=hidden)
+
+
+def keys_test(name, points, presses, hidden=False) -> Test:
+    return Test(name, "S7", points, "handle_key", {"presses": presses}, all_of(truth.key_checks()),
+                "exact", expected="none", hidden=hidden)
+
+
+START = {"running": True, "shading": "gouraud", "slices": 32, "stacks": 32}
+
+TESTS = [
+    perspective_test("S1 perspective: the handout's 30°, square window", 3, fovy=30, aspect=1.0, near=2, far=100),
+    perspective_test("S1 perspective: 60°, wide window", 3, fovy=60, aspect=16 / 9, near=0.5, far=50),
+    look_at_test("S2 look_at: the handout's camera", 3, eye=[0, 0, 8], center=[0, 0, 0], up=[0, 1, 0]),
+    look_at_test("S2 look_at: an oblique camera", 3, eye=[3, 4, 5], center=[1, -1, 0.5], up=[0, 1, 0]),
+    mesh_test("S3 sphere_mesh: glutSolidSphere(1, 32, 32)", 8, radius=1.0, slices=32, stacks=32),
+    mesh_test("S3 sphere_mesh: a coarse sphere, radius 2, 8 slices, 5 stacks", 6, radius=2.0, slices=8, stacks=5),
+    shader_test("S4 Gouraud: the handout's sphere, 500×500", "S4", 10, SPHERE_SCENE, (500, 500)),
+    shader_test("S4 Gouraud: a 320×240 window", "S4", 5, SPHERE_SCENE, (320, 240)),
+    shader_test("S5 Phong: the handout's sphere, 500×500", "S5", 8, SPHERE_SCENE, (500, 500)),
+    reshape_test("S6 reshape: square and wide windows", 3, width=500, height=500),
+    reshape_test("S6 reshape: a wide window keeps the sphere round", 3, width=800, height=300),
+    keys_test("S7 handle_key: q quits, s switches shading", 5,
+              [["q", START], ["s", START], ["s", {**START, "shading": "phong"}], ["x", START]]),
+]

@@ -1,0 +1,1 @@
+"""The autograder: tests declared per stage, run against a submission in a subprocess, reported."""

@@ -1,0 +1,263 @@
+"""The grader side: run each test's probe on the submission in a subprocess and judge what comes back.
+
+Student code never runs in this process. The truth for a test comes from a
+closed form or library in the spec, or from the reference running the same
+probe (in a worker too, cached on disk so a class of hundreds renders each
+reference image once).
+"""
+from __future__ import annotations
+
+import hashlib
+import importlib
+import json
+import os
+import resource
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+from .. import KIT_ROOT
+from ..errors import KitError
+from ..impl import resolve_impl
+from ..progress import Progress
+from ..stages import get_stage
+from .spec import Outputs, Test, Verdict
+
+OUTPUT_LIMIT = 4000          # characters of a probe's stdout and stderr kept for the report
+MEMORY_LIMIT = 4 << 30       # bytes of address space for a worker (llvmpipe reserves generously)
+FILE_LIMIT = 256 << 20       # largest file a worker may write
+
+
+@dataclass
+class ProbeResult:
+    ok: bool
+    outputs: Outputs
+    error: str
+    output: str
+    seconds: float
+
+
+def _limit_resources(timeout: float) -> None:  # runs in the child before exec
+    resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT, MEMORY_LIMIT))
+    resource.setrlimit(resource.RLIMIT_CPU, (int(timeout * 2) + 5, int(timeout * 2) + 10))
+    resource.setrlimit(resource.RLIMIT_FSIZE, (FILE_LIMIT, FILE_LIMIT))
+    resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+
+
+def _worker_env() -> dict[str, str]:
+    keep = ("PATH", "HOME", "LANG", "LC_ALL", "DISPLAY", "XDG_RUNTIME_DIR", "LD_LIBRARY_PATH",
+            "EGL_PLATFORM", "LIBGL_ALWAYS_SOFTWARE", "GALLIUM_DRIVER", "LP_NUM_THREADS", "__EGL_VENDOR_LIBRARY_FILENAMES")
+    env = {k: os.environ[k] for k in keep if k in os.environ}
+    env.setdefault("EGL_PLATFORM", "surfaceless")
+    env["PYTHONDONTWRITEBYTECODE"] = "1"
+    env["PYTHONHASHSEED"] = "0"
+    env["OMP_NUM_THREADS"] = env["OPENBLAS_NUM_THREADS"] = "1"
+    return env
+
+
+def _read_outputs(job: Path) -> tuple[bool, Outputs, str]:
+    """Read the worker's answer as untrusted data: JSON status, arrays without pickles."""
+    try:
+        status = json.loads((job / "status.json").read_text())
+        ok, error = bool(status.get("ok")), str(status.get("error", ""))[:2000]
+    except (OSError, ValueError, AttributeError):
+        return False, {}, "the submission stopped before finishing this test (it crashed, exited or was killed)"
+    if not ok:
+        return False, {}, error
+    try:
+        with np.load(job / "output.npz", allow_pickle=False) as data:
+            return True, {k: data[k] for k in data.files}, ""
+    except Exception as err:  # a corrupt or forged file is the submission's failure, not the grader's
+        return False, {}, f"the answer could not be read ({type(err).__name__})"
+
+
+def run_probe(stage: str, impl_dir: Path, probe: str, params: dict[str, Any],
+              inputs: Outputs | None = None, timeout: float = 60.0) -> ProbeResult:
+    """Run one probe on an implementation in a fresh subprocess with a time limit and resource limits."""
+    start = time.perf_counter()
+    with tempfile.TemporaryDirectory(prefix="cs451-job-") as tmp:
+        job = Path(tmp)
+        (job / "request.json").write_text(json.dumps({"stage": stage, "impl": str(impl_dir), "probe": probe,
+                                                      "params": params}))
+        if inputs:
+            np.savez(job / "inputs.npz", **inputs)
+        proc = subprocess.Popen([sys.executable, "-m", "cs451.grading.worker", str(job)], cwd=job,
+                                stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                env=_worker_env(), start_new_session=True,
+                                preexec_fn=lambda: _limit_resources(timeout))
+        try:
+            raw, _ = proc.communicate(timeout=timeout)
+            timed_out = False
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            raw, _ = proc.communicate()
+            timed_out = True
+        finally:
+            try:
+                os.killpg(proc.pid, signal.SIGKILL)  # whatever it left behind
+            except ProcessLookupError:
+                pass
+        output = raw.decode("utf-8", "replace")
+        if len(output) > OUTPUT_LIMIT:
+            output = output[:OUTPUT_LIMIT] + f"\n… ({len(output) - OUTPUT_LIMIT} more characters cut)"
+        seconds = time.perf_counter() - start
+        if timed_out:
+            return ProbeResult(False, {}, f"took longer than the {timeout:g} s limit (an infinite loop?)", output, seconds)
+        ok, outputs, error = _read_outputs(job)
+        if not ok and not error.strip():
+            error = "failed without a message"
+        if proc.returncode and proc.returncode < 0 and not ok:
+            sig = signal.Signals(-proc.returncode).name
+            error = f"the submission was killed by {sig} (out of memory or CPU time?)" if sig != "SIGKILL" or not error else error
+        return ProbeResult(ok, outputs, error, output, seconds)
+
+
+# --- reference answers, cached ------------------------------------------------
+
+def _tree_hash(*folders: Path) -> str:
+    h = hashlib.sha256()
+    for folder in folders:
+        for path in sorted(folder.rglob("*.py")):
+            if "__pycache__" not in path.parts:
+                h.update(path.as_posix().encode())
+                h.update(path.read_bytes())
+    return h.hexdigest()[:16]
+
+
+class ReferenceAnswers:
+    """The reference's answers to probes, computed once in a worker and kept on disk."""
+
+    def __init__(self, stage: str, cache_dir: Path | None = None):
+        self.stage = stage
+        self.impl = resolve_impl("reference", stage)
+        version = _tree_hash(self.impl, KIT_ROOT / "cs451")
+        self.dir = (cache_dir or KIT_ROOT / ".cs451-cache") / "reference" / stage / version
+        self.dir.mkdir(parents=True, exist_ok=True)
+
+    def get(self, probe: str, params: dict[str, Any], inputs: Outputs | None = None) -> Outputs:
+        key = hashlib.sha256(json.dumps([probe, params, sorted(inputs or {})], sort_keys=True).encode()).hexdigest()[:20]
+        path = self.dir / f"{probe}-{key}.npz"
+        if path.exists():
+            with np.load(path, allow_pickle=False) as data:
+                return {k: data[k] for k in data.files}
+        result = run_probe(self.stage, self.impl, probe, params, inputs, timeout=300)
+        if not result.ok:
+            raise KitError(f"the reference failed on probe {probe} {params}: {result.error}\n{result.output}")
+        np.savez(path.with_suffix(".tmp.npz"), **result.outputs)
+        os.replace(path.with_suffix(".tmp.npz"), path)
+        return result.outputs
+
+
+# --- loading specs --------------------------------------------------------------
+
+def _load_spec_module(stage: str, name: str) -> ModuleType | None:
+    """Import autograder/<stage>/<name>.py in the grader's process (specs import each other as ``autograder.*``)."""
+    if not (KIT_ROOT / "autograder" / stage / f"{name}.py").exists():
+        return None
+    if str(KIT_ROOT) not in sys.path:
+        sys.path.insert(0, str(KIT_ROOT))
+    return importlib.import_module(f"autograder.{stage}.{name}")
+
+
+def load_tests(stage: str, include_hidden: bool = True) -> list[Test]:
+    """The stage's tests in rubric order, numbered per task (S1.1, S1.2, …)."""
+    public = _load_spec_module(stage, "public")
+    if public is None:
+        raise KitError(f"no autograder tests for stage {stage!r} (expected autograder/{stage}/public.py)")
+    tests = list(public.TESTS)
+    hidden = _load_spec_module(stage, "hidden") if include_hidden else None
+    if hidden is not None:
+        tests += [t for t in hidden.TESTS]
+    order = [t.id for t in get_stage(stage).tasks]
+    tests.sort(key=lambda t: (order.index(t.task), t.hidden))
+    counts: dict[str, int] = {}
+    numbered = []
+    for t in tests:
+        counts[t.task] = counts.get(t.task, 0) + 1
+        numbered.append(Test(**{**t.__dict__, "number": f"{t.task}.{counts[t.task]}"}))
+    return numbered
+
+
+# --- grading ------------------------------------------------------------------------
+
+@dataclass
+class TestResult:
+    test: Test
+    score: float
+    verdict: Verdict
+    output: str = ""
+    seconds: float = 0.0
+
+
+@dataclass
+class GradeResult:
+    stage: str
+    submission: str
+    results: list[TestResult] = field(default_factory=list)
+    problems: list[str] = field(default_factory=list)   # interface problems found before the tests ran
+    seconds: float = 0.0
+
+    @property
+    def score(self) -> float:
+        return sum(r.score for r in self.results)
+
+    @property
+    def max_score(self) -> float:
+        return sum(r.test.points for r in self.results)
+
+
+def _run_test(test: Test, stage: str, impl_dir: Path, reference: ReferenceAnswers) -> TestResult:
+    try:
+        given = reference.get(test.given, test.params) if test.given else None
+        expected = reference.get(test.probe, test.params, given) if test.expected == "reference" else None
+    except KitError as err:
+        return TestResult(test, 0.0, Verdict(0.0, f"grader error, not your fault: {err}"))
+    result = run_probe(stage, impl_dir, test.probe, test.params, given, timeout=test.timeout)
+    if not result.ok:
+        return TestResult(test, 0.0, Verdict(0.0, result.error), result.output, result.seconds)
+    try:
+        verdict = test.check(result.outputs, expected, test.params)
+    except Exception as err:  # a malformed answer the check did not foresee is the submission's, not a crash
+        verdict = Verdict(0.0, f"the answer has the wrong form ({type(err).__name__}: {err})")
+    fraction = min(max(float(np.nan_to_num(verdict.fraction)), 0.0), 1.0)
+    return TestResult(test, round(test.points * fraction, 4), verdict, result.output, result.seconds)
+
+
+def grade(stage: str, submission: str | Path, include_hidden: bool = True, show_progress: bool = True,
+          jobs: int | None = None) -> GradeResult:
+    """Grade one submission of a stage; never raises for anything the submission does."""
+    start = time.perf_counter()
+    get_stage(stage)
+    tests = load_tests(stage, include_hidden)
+    impl_dir = resolve_impl(submission, stage)
+    out = GradeResult(stage, str(submission))
+    reference = ReferenceAnswers(stage)
+    probe = run_probe(stage, impl_dir, "__interface__", {}, timeout=60)
+    if not probe.ok:  # the submission does not even import: every test gets the same reason
+        out.problems = [probe.error]
+        out.results = [TestResult(t, 0.0, Verdict(0.0, f"not run: {probe.error}"), probe.output) for t in tests]
+        out.seconds = time.perf_counter() - start
+        return out
+    out.problems = [str(p) for p in probe.outputs.get("problems", [])]
+    bar = Progress(f"grading {stage}", len(tests)) if show_progress else None
+    results: dict[int, TestResult] = {}
+    with ThreadPoolExecutor(max_workers=jobs or min(2, os.cpu_count() or 1)) as pool:
+        futures = {pool.submit(_run_test, t, stage, impl_dir, reference): i for i, t in enumerate(tests)}
+        for future in futures:
+            results[futures[future]] = future.result()
+            if bar:
+                bar.advance(note=tests[futures[future]].number)
+    if bar:
+        bar.close()
+    out.results = [results[i] for i in range(len(tests))]
+    out.seconds = time.perf_counter() - start
+    return out

@@ -1,0 +1,11 @@
+"""Stage 1, the lit sphere: the functions you write, gathered for the kit to call.
+
+The kit imports this package and calls only the names below (see
+``cs451/stages/sphere.py`` for the interface). Keep them.
+"""
+from .camera import look_at, perspective, reshape
+from .controls import handle_key
+from .mesh import sphere_mesh
+from .shaders import gouraud_shaders, phong_shaders
+
+__all__ = ["perspective", "look_at", "sphere_mesh", "gouraud_shaders", "phong_shaders", "reshape", "handle_key"]

@@ -1,0 +1,39 @@
+"""S1, S2, S6: the matrices that replace gluPerspective, gluLookAt and the GLUT reshape callback.
+
+Matrices are numpy float64 arrays of shape (4, 4) acting on column vectors
+(``clip = P @ V @ p``), as in the OpenGL specification; the kit transposes them
+for the GPU.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def perspective(fovy: float, aspect: float, near: float, far: float) -> np.ndarray:
+    """gluPerspective: the projection for a vertical field of view ``fovy`` in degrees.
+
+    Returns a (4, 4) float array mapping eye space to clip space.
+    """
+    # TODO S1: build the matrix of gluPerspective row by row (handout §S1)
+    raise NotImplementedError("S1: build the matrix of gluPerspective row by row (handout §S1)")
+
+
+def look_at(eye, center, up) -> np.ndarray:
+    """gluLookAt: the view matrix for a camera at ``eye`` looking at ``center``.
+
+    ``eye``, ``center`` and ``up`` are 3-vectors. Returns a (4, 4) float array
+    mapping world space to eye space (the camera at the origin looking down -z).
+    """
+    # TODO S2: the rows are s, u and -f, then a translation by -eye (handout §S2)
+    raise NotImplementedError("S2: the rows are s, u and -f, then a translation by -eye (handout §S2)")
+
+
+def reshape(width: int, height: int, camera) -> tuple:
+    """The GLUT reshape callback: the viewport and a projection that keeps the aspect ratio.
+
+    ``camera`` has ``fovy``, ``near`` and ``far``. Returns ``((x, y, w, h), projection)``
+    where the viewport covers the whole window and ``projection`` is (4, 4).
+    A window may be minimised to a height of 0: do not divide by zero.
+    """
+    # TODO S6: cover the window, and use its aspect ratio in the projection (handout §S6)
+    raise NotImplementedError("S6: cover the window, and use its aspect ratio in the projection (handout §S6)")

@@ -1,0 +1,27 @@
+"""S4, S5: shaders that reproduce OpenGL 1.x fixed-function lighting.
+
+The kit puts ``#version 330`` and the declarations of every uniform and input
+in front of your source (see ``GLSL_INTERFACE`` in ``cs451/stages/sphere.py``):
+the vertex shader receives ``in_position`` and ``in_normal`` in object space;
+the fragment shader writes ``frag_color``.
+"""
+from __future__ import annotations
+
+
+
+def gouraud_shaders() -> tuple[str, str]:
+    """Per-vertex lighting, as glShadeModel(GL_SMOOTH): the colour is computed at each vertex and interpolated.
+
+    Returns ``(vertex_source, fragment_source)`` without the ``#version`` line.
+    """
+    # TODO S4: light each vertex in eye space, pass the colour down, interpolate (handout §S4)
+    raise NotImplementedError("S4: light each vertex in eye space, pass the colour down, interpolate (handout §S4)")
+
+
+def phong_shaders() -> tuple[str, str]:
+    """Per-fragment lighting (Phong shading): interpolate position and normal, light each pixel.
+
+    Returns ``(vertex_source, fragment_source)`` without the ``#version`` line.
+    """
+    # TODO S5: pass eye-space position and normal down, renormalise, light per fragment (handout §S5)
+    raise NotImplementedError("S5: pass eye-space position and normal down, renormalise, light per fragment (handout §S5)")
