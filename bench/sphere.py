@@ -1,0 +1,69 @@
+"""Stage 1 benchmark: frame time against error over the sphere's tessellation, Gouraud and Phong.
+
+Error is measured against a converged render (Phong, 512×512 tessellation) of the
+same scene; times are per frame, drawing into an offscreen framebuffer after the
+buffers are built (the display-list idea), on whatever GL the machine has.
+"""
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from cs451.gl import create_context, renderer_name
+from cs451.impl import load_impl, resolve_impl
+from cs451.scene import load_scene
+from cs451.stages import sphere as s1
+
+
+def _frame_time(ctx, renderer, scene, view, projection, repeats: int) -> float:
+    renderer.draw(scene, view, projection, True)
+    ctx.finish()
+    start = time.perf_counter()
+    for _ in range(repeats):
+        renderer.draw(scene, view, projection, True)
+        ctx.finish()
+    return (time.perf_counter() - start) / repeats
+
+
+def main(output: Path, quick: bool = False) -> dict:
+    impl = load_impl(resolve_impl("reference", "sphere"), "sphere")
+    scene = load_scene("sphere")
+    w, h = scene.image.width, scene.image.height
+    ctx = create_context()
+    fbo = ctx.framebuffer(color_attachments=[ctx.renderbuffer((w, h), 4)], depth_attachment=ctx.depth_renderbuffer((w, h)))
+    fbo.use()
+    cam = scene.camera
+    viewport, projection = impl.reshape(w, h, cam)
+    ctx.viewport = viewport
+    view = impl.look_at(cam.eye, cam.center, cam.up)
+
+    def image_of(renderer) -> np.ndarray:
+        renderer.draw(scene, view, projection, True)
+        ctx.finish()
+        return s1._read_pixels(fbo, w, h)
+
+    converged = image_of(s1.SphereRenderer(ctx, impl.phong_shaders(), [impl.sphere_mesh(1.0, 512, 512)]))
+    repeats = 5 if quick else 30
+    rows = []
+    for n in (8, 16, 32, 64, 128, 256):
+        for shading in ("gouraud", "phong"):
+            shaders = impl.gouraud_shaders() if shading == "gouraud" else impl.phong_shaders()
+            renderer = s1.SphereRenderer(ctx, shaders, [impl.sphere_mesh(1.0, n, n)])
+            err = np.abs(image_of(renderer) - converged).max(axis=2)
+            rows.append({"tessellation": n, "shading": shading, "triangles": 2 * n * (n - 1),
+                         "frame_ms": 1000 * _frame_time(ctx, renderer, scene, view, projection, repeats),
+                         "mean_error": float(err.mean()), "max_error": float(err.max())})
+    base = next(r["frame_ms"] for r in rows if r["tessellation"] == 32 and r["shading"] == "gouraud")
+    print(f"stage 1 sphere, {w}×{h}, {renderer_name(ctx)}; error against Phong at 512×512")
+    print(f"{'slices=stacks':>13} {'shading':>8} {'triangles':>9} {'frame ms':>9} {'× 32 Gouraud':>13} {'mean err':>9} {'max err':>8}")
+    for r in rows:
+        print(f"{r['tessellation']:>13} {r['shading']:>8} {r['triangles']:>9} {r['frame_ms']:>9.2f} "
+              f"{r['frame_ms'] / base:>13.2f} {r['mean_error']:>9.5f} {r['max_error']:>8.3f}")
+    output.mkdir(parents=True, exist_ok=True)
+    result = {"renderer": renderer_name(ctx), "size": [w, h], "rows": rows}
+    (output / "sphere.json").write_text(json.dumps(result, indent=2))
+    print(f"wrote {output / 'sphere.json'}")
+    return result

@@ -1,0 +1,137 @@
+"""The ``cs451`` command: a thin layer over keyword-only functions (as otter-grader's CLI).
+
+Every subcommand forwards to a function the tests and the Python API call too.
+Errors a user can fix print as one line, without a traceback, and exit with 2.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .errors import KitError
+
+
+def _cmd_render(a: argparse.Namespace) -> int:
+    from .render import render_scene
+    path, seconds = render_scene(scene=a.scene, output=a.output, impl=a.impl, size=a.size, stage=a.stage,
+                                 shading=a.shading)
+    print(f"wrote {path} ({seconds:.2f} s)")
+    return 0
+
+
+def _cmd_grade(a: argparse.Namespace) -> int:
+    from .grading.report import write_report
+    from .grading.results import format_table, write_results
+    from .grading.runner import grade
+    result = grade(a.stage, a.submission, include_hidden=not a.public_only, jobs=a.jobs)
+    print(format_table(result))
+    if a.results:
+        print(f"wrote {write_results(a.results, result)}")
+    if a.report:
+        print(f"wrote {write_report(a.report, result, show_hidden=not a.student_view)}")
+    return 0
+
+
+def _cmd_starter(a: argparse.Namespace) -> int:
+    from .starter import check_starter, generate_starter
+    if a.check:
+        drift = check_starter()
+        for d in drift:
+            print(f"starter/{d.path}: {d.reason}")
+        if drift:
+            print("starter/ has drifted from reference/: run `cs451 starter` to regenerate it", file=sys.stderr)
+            return 1
+        print("starter/ is in step with reference/")
+        return 0
+    files = generate_starter()
+    print(f"regenerated starter/ from reference/ ({len(files)} files)")
+    return 0
+
+
+def _cmd_demo(a: argparse.Namespace) -> int:
+    from .demo import run_demo
+    window = True if a.window else (False if a.no_window else None)
+    paths = run_demo(stage=a.stage, impl=a.impl, output=a.output, window=window, frames=a.frames)
+    for p in paths:
+        print(f"wrote {p}")
+    if paths:
+        print("(no display: wrote images instead of opening a window)")
+    return 0
+
+
+def _cmd_scenes(a: argparse.Namespace) -> int:
+    from .scene import bundled_scenes, load_scene
+    for name in bundled_scenes():
+        print(f"{name:<16} {load_scene(name).description}")
+    return 0
+
+
+def _cmd_bench(a: argparse.Namespace) -> int:
+    from .bench import run_bench
+    run_bench(stage=a.stage, output=a.output, quick=a.quick)
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from .stages import stage_names
+    p = argparse.ArgumentParser(prog="cs451", description="cs451-kit: render, grade, and build the course's stages.")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    r = sub.add_parser("render", help="render a scene to a PNG", description="Render a scene with an implementation of a stage.")
+    r.add_argument("scene", help="a bundled scene name (see `cs451 scenes`) or a path to a scene JSON file")
+    r.add_argument("-o", "--output", required=True, help="PNG file to write")
+    r.add_argument("--impl", default="reference", help="reference, starter, or the path of your submission folder (default: reference)")
+    r.add_argument("--size", help="WIDTHxHEIGHT, overriding the scene's image size")
+    r.add_argument("--stage", choices=stage_names(), help="which stage renders the scene (default: from the scene's options)")
+    r.add_argument("--shading", choices=["gouraud", "phong"], help="stage 1 only: override the scene's shading")
+    r.set_defaults(func=_cmd_render)
+
+    g = sub.add_parser("grade", help="grade a submission and write a report", description="Run a stage's autograder tests on a submission.")
+    g.add_argument("stage", choices=stage_names())
+    g.add_argument("--submission", default="starter", help="reference, starter, or a folder holding your stage package (default: starter)")
+    g.add_argument("--results", help="write Gradescope's results.json here")
+    g.add_argument("--report", help="write an HTML report (reference, yours, difference, error map) into this folder")
+    g.add_argument("--public-only", action="store_true", help="run only the public tests, as a student's copy does")
+    g.add_argument("--student-view", action="store_true", help="report: count hidden tests without showing them")
+    g.add_argument("--jobs", type=int, default=None, help="tests run at once (default: 2)")
+    g.set_defaults(func=_cmd_grade)
+
+    s = sub.add_parser("starter", help="regenerate starter/ from reference/", description="Regenerate starter/ from the solution regions of reference/.")
+    s.add_argument("--check", action="store_true", help="only check: exit 1 if starter/ has drifted")
+    s.set_defaults(func=_cmd_starter)
+
+    d = sub.add_parser("demo", help="the lecture demo: a window, or images without a display", description="Run a stage's demo.")
+    d.add_argument("stage", choices=["sphere"])
+    d.add_argument("--impl", default="reference", help="reference, starter, or a submission folder")
+    d.add_argument("-o", "--output", default="demo", help="folder for the images when there is no display (default: demo)")
+    d.add_argument("--window", action="store_true", help="open a window even if no display is detected")
+    d.add_argument("--no-window", action="store_true", help="write images even if there is a display")
+    d.add_argument("--frames", type=int, help="close the window after this many frames (for scripted demos)")
+    d.set_defaults(func=_cmd_demo)
+
+    sc = sub.add_parser("scenes", help="list the bundled scenes", description="List the bundled scenes.")
+    sc.set_defaults(func=_cmd_scenes)
+
+    b = sub.add_parser("bench", help="time-against-error benchmarks", description="Run a stage's benchmark; prints a table and writes JSON.")
+    b.add_argument("stage", choices=stage_names())
+    b.add_argument("-o", "--output", default="bench-results", help="folder for the JSON and plots (default: bench-results)")
+    b.add_argument("--quick", action="store_true", help="fewer repetitions")
+    b.set_defaults(func=_cmd_bench)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except KitError as err:
+        print(f"cs451: error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("cs451: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

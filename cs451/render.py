@@ -1,0 +1,45 @@
+"""``cs451 render``: render a scene with an implementation of a stage and write a PNG."""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from .errors import KitError
+from .imageio import save_png
+from .impl import load_impl, resolve_impl
+from .scene import load_scene
+from .stages import get_stage, stage_names
+
+
+def parse_size(text: str | None) -> tuple[int, int] | None:
+    """'640x480' to (640, 480)."""
+    if text is None:
+        return None
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise KitError(f"--size: expected WIDTHxHEIGHT such as 640x480, got {text!r}") from None
+    if w <= 0 or h <= 0 or w * h > 64_000_000:
+        raise KitError(f"--size: {w}x{h} is not a usable image size")
+    return w, h
+
+
+def infer_stage(scene) -> str:
+    """The stage a scene is meant for: the first stage named in its ``options``, else stage 1."""
+    for name in scene.options:
+        if name in stage_names():
+            return name
+    return stage_names()[0]
+
+
+def render_scene(*, scene: str, output: str | Path, impl: str = "reference", size: str | None = None,
+                 stage: str | None = None, shading: str | None = None) -> tuple[Path, float]:
+    """Render ``scene`` (a bundled name or a JSON path) and write ``output``; returns the path and seconds."""
+    sc = load_scene(scene)
+    st = get_stage(stage or infer_stage(sc))
+    module = load_impl(resolve_impl(impl, st.name), st.name)
+    start = time.perf_counter()
+    kwargs = {"shading": shading} if shading else {}
+    image = st.render(sc, module, parse_size(size), **kwargs)
+    seconds = time.perf_counter() - start
+    return save_png(output, image, sc.image.exposure, sc.image.srgb), seconds

