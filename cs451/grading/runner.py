@@ -11,9 +11,7 @@ import hashlib
 import importlib
 import json
 import os
-import resource
 import signal
-import subprocess
 import sys
 import tempfile
 import time
@@ -30,12 +28,8 @@ from ..errors import KitError
 from ..impl import resolve_impl
 from ..progress import Progress
 from ..stages import get_stage
+from . import sandbox
 from .spec import Outputs, Test, Verdict
-
-OUTPUT_LIMIT = 4000          # characters of a probe's stdout and stderr kept for the report
-MEMORY_LIMIT = 4 << 30       # bytes of address space for a worker (llvmpipe reserves generously)
-FILE_LIMIT = 256 << 20       # largest file a worker may write
-
 
 @dataclass
 class ProbeResult:
@@ -44,24 +38,6 @@ class ProbeResult:
     error: str
     output: str
     seconds: float
-
-
-def _limit_resources(timeout: float) -> None:  # runs in the child before exec
-    resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT, MEMORY_LIMIT))
-    resource.setrlimit(resource.RLIMIT_CPU, (int(timeout * 2) + 5, int(timeout * 2) + 10))
-    resource.setrlimit(resource.RLIMIT_FSIZE, (FILE_LIMIT, FILE_LIMIT))
-    resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
-
-
-def _worker_env() -> dict[str, str]:
-    keep = ("PATH", "HOME", "LANG", "LC_ALL", "DISPLAY", "XDG_RUNTIME_DIR", "LD_LIBRARY_PATH",
-            "EGL_PLATFORM", "LIBGL_ALWAYS_SOFTWARE", "GALLIUM_DRIVER", "LP_NUM_THREADS", "__EGL_VENDOR_LIBRARY_FILENAMES")
-    env = {k: os.environ[k] for k in keep if k in os.environ}
-    env.setdefault("EGL_PLATFORM", "surfaceless")
-    env["PYTHONDONTWRITEBYTECODE"] = "1"
-    env["PYTHONHASHSEED"] = "0"
-    env["OMP_NUM_THREADS"] = env["OPENBLAS_NUM_THREADS"] = "1"
-    return env
 
 
 def _read_outputs(job: Path) -> tuple[bool, Outputs, str]:
@@ -81,44 +57,32 @@ def _read_outputs(job: Path) -> tuple[bool, Outputs, str]:
 
 
 def run_probe(stage: str, impl_dir: Path, probe: str, params: dict[str, Any],
-              inputs: Outputs | None = None, timeout: float = 60.0) -> ProbeResult:
-    """Run one probe on an implementation in a fresh subprocess with a time limit and resource limits."""
+              inputs: Outputs | None = None, timeout: float = 60.0, trusted: bool = False,
+              drop_privileges: bool = True) -> ProbeResult:
+    """Run one probe on an implementation in a fresh sandboxed subprocess (see :mod:`.sandbox`)."""
     start = time.perf_counter()
-    with tempfile.TemporaryDirectory(prefix="cs451-job-") as tmp:
-        job = Path(tmp)
+    with tempfile.TemporaryDirectory(prefix="cs451-") as tmp:
+        job = Path(tmp) / "job"
+        job.mkdir()
         (job / "request.json").write_text(json.dumps({"stage": stage, "impl": str(impl_dir), "probe": probe,
                                                       "params": params}))
         if inputs:
             np.savez(job / "inputs.npz", **inputs)
-        proc = subprocess.Popen([sys.executable, "-m", "cs451.grading.worker", str(job)], cwd=job,
-                                stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                env=_worker_env(), start_new_session=True,
-                                preexec_fn=lambda: _limit_resources(timeout))
-        try:
-            raw, _ = proc.communicate(timeout=timeout)
-            timed_out = False
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            raw, _ = proc.communicate()
-            timed_out = True
-        finally:
-            try:
-                os.killpg(proc.pid, signal.SIGKILL)  # whatever it left behind
-            except ProcessLookupError:
-                pass
-        output = raw.decode("utf-8", "replace")
-        if len(output) > OUTPUT_LIMIT:
-            output = output[:OUTPUT_LIMIT] + f"\n… ({len(output) - OUTPUT_LIMIT} more characters cut)"
+        done = sandbox.run_untrusted([sys.executable, "-m", "cs451.grading.worker", str(job)], job,
+                                     sandbox.Limits(wall_seconds=timeout), trusted=trusted,
+                                     drop_privileges=drop_privileges)
         seconds = time.perf_counter() - start
-        if timed_out:
-            return ProbeResult(False, {}, f"took longer than the {timeout:g} s limit (an infinite loop?)", output, seconds)
+        if done.timed_out:
+            return ProbeResult(False, {}, f"took longer than the {timeout:g} s limit (an infinite loop?)", done.output, seconds)
         ok, outputs, error = _read_outputs(job)
-        if not ok and not error.strip():
-            error = "failed without a message"
-        if proc.returncode and proc.returncode < 0 and not ok:
-            sig = signal.Signals(-proc.returncode).name
-            error = f"the submission was killed by {sig} (out of memory or CPU time?)" if sig != "SIGKILL" or not error else error
-        return ProbeResult(ok, outputs, error, output, seconds)
+        if not ok and done.returncode is not None and done.returncode < 0:
+            sig = signal.Signals(-done.returncode).name
+            reason = {"SIGXCPU": "it used more CPU time than allowed", "SIGXFSZ": "it wrote more output than allowed",
+                      "SIGKILL": "it was killed (out of memory?)", "SIGSEGV": "it crashed (segmentation fault)"}
+            error = f"the submission stopped: {reason.get(sig, sig)}"
+        elif not ok and "MemoryError" in error:
+            error += f" (the limit is {sandbox.MEMORY_LIMIT >> 30} GiB)"
+        return ProbeResult(ok, outputs, error or "failed without a message", done.output, seconds)
 
 
 # --- reference answers, cached ------------------------------------------------
@@ -149,7 +113,7 @@ class ReferenceAnswers:
         if path.exists():
             with np.load(path, allow_pickle=False) as data:
                 return {k: data[k] for k in data.files}
-        result = run_probe(self.stage, self.impl, probe, params, inputs, timeout=300)
+        result = run_probe(self.stage, self.impl, probe, params, inputs, timeout=300, trusted=True)
         if not result.ok:
             raise KitError(f"the reference failed on probe {probe} {params}: {result.error}\n{result.output}")
         np.savez(path.with_suffix(".tmp.npz"), **result.outputs)
@@ -205,6 +169,7 @@ class GradeResult:
     results: list[TestResult] = field(default_factory=list)
     problems: list[str] = field(default_factory=list)   # interface problems found before the tests ran
     seconds: float = 0.0
+    isolation: str = ""                                  # how the submission was isolated, for the report
 
     @property
     def score(self) -> float:
@@ -215,13 +180,18 @@ class GradeResult:
         return sum(r.test.points for r in self.results)
 
 
-def _run_test(test: Test, stage: str, impl_dir: Path, reference: ReferenceAnswers) -> TestResult:
+def _run_test(test: Test, stage: str, impl_dir: Path, reference: ReferenceAnswers, drop: bool,
+              deadline: float) -> TestResult:
+    remaining = deadline - time.perf_counter()
+    if remaining <= 1:
+        return TestResult(test, 0.0, Verdict(0.0, "not run: the time limit for the whole submission was reached"))
     try:
         given = reference.get(test.given, test.params) if test.given else None
         expected = reference.get(test.probe, test.params, given) if test.expected == "reference" else None
     except KitError as err:
         return TestResult(test, 0.0, Verdict(0.0, f"grader error, not your fault: {err}"))
-    result = run_probe(stage, impl_dir, test.probe, test.params, given, timeout=test.timeout)
+    result = run_probe(stage, impl_dir, test.probe, test.params, given, timeout=min(test.timeout, remaining),
+                       drop_privileges=drop)
     if not result.ok:
         return TestResult(test, 0.0, Verdict(0.0, result.error), result.output, result.seconds)
     try:
@@ -233,15 +203,25 @@ def _run_test(test: Test, stage: str, impl_dir: Path, reference: ReferenceAnswer
 
 
 def grade(stage: str, submission: str | Path, include_hidden: bool = True, show_progress: bool = True,
-          jobs: int | None = None) -> GradeResult:
+          jobs: int | None = None, total_timeout: float = 600.0) -> GradeResult:
     """Grade one submission of a stage; never raises for anything the submission does."""
     start = time.perf_counter()
+    deadline = start + total_timeout
     get_stage(stage)
     tests = load_tests(stage, include_hidden)
     impl_dir = resolve_impl(submission, stage)
     out = GradeResult(stage, str(submission))
     reference = ReferenceAnswers(stage)
-    probe = run_probe(stage, impl_dir, "__interface__", {}, timeout=60)
+    problem = sandbox.isolation_problem(impl_dir)
+    drop = sandbox.is_root() and problem is None
+    if drop:  # the worker's user must not read the reference, the hidden tests or the cached answers
+        sandbox.protect(KIT_ROOT / "reference", KIT_ROOT / "autograder", reference.dir.parent.parent)
+        out.isolation = f"each test in a subprocess as '{sandbox.UNPRIVILEGED_USER}', with time, memory, CPU, file and process limits"
+    elif problem:
+        out.isolation = f"each test in a subprocess with limits, as the grader's user ({problem})"
+    else:
+        out.isolation = "each test in a subprocess with time, memory, CPU, file and process limits"
+    probe = run_probe(stage, impl_dir, "__interface__", {}, timeout=60, drop_privileges=drop)
     if not probe.ok:  # the submission does not even import: every test gets the same reason
         out.problems = [probe.error]
         out.results = [TestResult(t, 0.0, Verdict(0.0, f"not run: {probe.error}"), probe.output) for t in tests]
@@ -251,7 +231,8 @@ def grade(stage: str, submission: str | Path, include_hidden: bool = True, show_
     bar = Progress(f"grading {stage}", len(tests)) if show_progress else None
     results: dict[int, TestResult] = {}
     with ThreadPoolExecutor(max_workers=jobs or min(2, os.cpu_count() or 1)) as pool:
-        futures = {pool.submit(_run_test, t, stage, impl_dir, reference): i for i, t in enumerate(tests)}
+        futures = {pool.submit(_run_test, t, stage, impl_dir, reference, drop, deadline): i
+                   for i, t in enumerate(tests)}
         for future in futures:
             results[futures[future]] = future.result()
             if bar:
