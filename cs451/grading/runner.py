@@ -203,12 +203,18 @@ def _run_test(test: Test, stage: str, impl_dir: Path, reference: ReferenceAnswer
 
 
 def grade(stage: str, submission: str | Path, include_hidden: bool = True, show_progress: bool = True,
-          jobs: int | None = None, total_timeout: float = 600.0) -> GradeResult:
-    """Grade one submission of a stage; never raises for anything the submission does."""
+          jobs: int | None = None, total_timeout: float = 600.0, tasks: list[str] | None = None,
+          test_timeout: float | None = None) -> GradeResult:
+    """Grade one submission of a stage; never raises for anything the submission does.
+
+    ``tasks`` keeps only those tasks' tests; ``test_timeout`` overrides every test's time limit.
+    """
     start = time.perf_counter()
     deadline = start + total_timeout
     get_stage(stage)
-    tests = load_tests(stage, include_hidden)
+    tests = [t for t in load_tests(stage, include_hidden) if tasks is None or t.task in tasks]
+    if test_timeout is not None:
+        tests = [Test(**{**t.__dict__, "timeout": test_timeout}) for t in tests]
     impl_dir = resolve_impl(submission, stage)
     out = GradeResult(stage, str(submission))
     reference = ReferenceAnswers(stage)

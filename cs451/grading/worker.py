@@ -8,6 +8,7 @@ implementation folder, the probe and its parameters; trusted inputs arrive in
 """
 from __future__ import annotations
 
+import errno
 import json
 import sys
 import traceback
@@ -53,6 +54,14 @@ def run(job: Path) -> int:
         _write_status(job, True)
     except KitError as err:
         _write_status(job, False, str(err))
+    except OSError as err:
+        if err.errno == errno.EFBIG:  # RLIMIT_FSIZE: Python ignores SIGXFSZ, so the write fails instead
+            _write_status(job, False, "the submission wrote more output than allowed (File too large)")
+        else:
+            where = _student_frame(traceback.extract_tb(err.__traceback__), impl_dir)
+            _write_status(job, False, f"{type(err).__name__}: {err}{where}")
+    except MemoryError:
+        _write_status(job, False, "MemoryError: the submission ran out of memory")
     except RecursionError:
         _write_status(job, False, "RecursionError: maximum recursion depth exceeded")
     except Exception as err:  # the submission's own bug: report it, one line, pointing at its code
