@@ -21,10 +21,23 @@ def _cmd_render(a: argparse.Namespace) -> int:
 
 
 def _cmd_grade(a: argparse.Namespace) -> int:
+    if a.roster:
+        from .grading.roster import grade_roster
+        path = grade_roster(stage=a.stage, roster=a.roster, output=a.report or "grades",
+                            include_hidden=not a.public_only, parallel=a.jobs)
+        print(f"wrote {path} and one report per student beside it")
+        return 0
     from .grading.report import write_report
     from .grading.results import format_table, write_results
+    from .grading.results import write_failure
     from .grading.runner import grade
-    result = grade(a.stage, a.submission, include_hidden=not a.public_only, jobs=a.jobs)
+    try:
+        result = grade(a.stage, a.submission, include_hidden=not a.public_only, jobs=a.jobs)
+    except BaseException as err:  # a results file is always written, with the reason, before we fail
+        if a.results:
+            write_failure(a.results, f"{type(err).__name__}: {err}")
+            print(f"wrote {a.results} (grading failed: {err})", file=sys.stderr)
+        raise
     print(format_table(result))
     if a.results:
         print(f"wrote {write_results(a.results, result)}")
@@ -90,8 +103,10 @@ def build_parser() -> argparse.ArgumentParser:
     g = sub.add_parser("grade", help="grade a submission and write a report", description="Run a stage's autograder tests on a submission.")
     g.add_argument("stage", choices=stage_names())
     g.add_argument("--submission", default="starter", help="reference, starter, or a folder holding your stage package (default: starter)")
+    g.add_argument("--roster", help="grade every submission folder inside this folder (one per student)")
     g.add_argument("--results", help="write Gradescope's results.json here")
-    g.add_argument("--report", help="write an HTML report (reference, yours, difference, error map) into this folder")
+    g.add_argument("--report", help="write an HTML report (reference, yours, difference, error map) into this folder; "
+                   "with --roster, the folder for the gradebook and reports (default: grades)")
     g.add_argument("--public-only", action="store_true", help="run only the public tests, as a student's copy does")
     g.add_argument("--student-view", action="store_true", help="report: count hidden tests without showing them")
     g.add_argument("--jobs", type=int, default=None, help="tests run at once (default: 2)")

@@ -60,3 +60,13 @@ def format_table(result: GradeResult, width: int = 100) -> str:
     for p in result.problems:
         lines.append(f"problem: {p}")
     return "\n".join(lines)
+
+
+def write_failure(path: str | Path, reason: str) -> Path:
+    """The results file when grading itself could not finish: zero points, and why."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps({"score": 0, "output": f"The autograder could not finish: {reason}\n"
+                                "This is not a verdict on your code; tell your instructor.",
+                                "visibility": "visible", "tests": []}, indent=2))
+    return path
