@@ -18,6 +18,8 @@ from autograder.sphere import truth
 #: Tolerance of the image tests: measured margin in assignments/01-sphere/README.md ("Tolerances").
 IMAGE = ImageTolerance(threshold=0.016, max_bad_fraction=0.01, shift=1)
 MATRIX_TOL = "entries within 1e-6 relative, 1e-9 absolute"
+#: Time limits per test: generous for clear numpy code (the reference takes under 0.2 s for each).
+QUICK, RENDER = 10.0, 30.0
 
 SPHERE_SCENE = json.loads((BUNDLED_DIR / "sphere.json").read_text())
 
@@ -31,34 +33,36 @@ def scene_variant(**changes) -> dict:
 
 def perspective_test(name, points, hidden=False, **params) -> Test:
     return Test(name, "S1", points, "perspective", params, array_close("matrix", truth.perspective, what="the matrix"),
-                MATRIX_TOL, expected="none", hidden=hidden)
+                MATRIX_TOL, expected="none", hidden=hidden, timeout=QUICK)
 
 
 def look_at_test(name, points, hidden=False, **params) -> Test:
     return Test(name, "S2", points, "look_at", params, array_close("matrix", truth.look_at, what="the matrix"),
-                MATRIX_TOL, expected="none", hidden=hidden)
+                MATRIX_TOL, expected="none", hidden=hidden, timeout=QUICK)
 
 
 def mesh_test(name, points, hidden=False, **params) -> Test:
     return Test(name, "S3", points, "sphere_mesh", params, all_of(truth.mesh_checks()),
-                "positions within 1e-6·radius of freeglut's; normals unit within 1e-5", expected="none", hidden=hidden)
+                "positions within 1e-6·radius of freeglut's; normals unit within 1e-5", expected="none", hidden=hidden,
+                timeout=QUICK)
 
 
 def shader_test(name, task, points, scene, size, hidden=False) -> Test:
     shading = "gouraud" if task == "S4" else "phong"
     return Test(name, task, points, "render", {"scene": scene, "size": list(size), "shading": shading},
-                image_matches(IMAGE), IMAGE.describe(), given="parts", hidden=hidden)
+                image_matches(IMAGE), IMAGE.describe(), given="parts", hidden=hidden, timeout=RENDER)
 
 
 def reshape_test(name, points, hidden=False, **params) -> Test:
     params.setdefault("camera", SPHERE_SCENE["camera"])
     return Test(name, "S6", points, "reshape", params, all_of(truth.reshape_checks()),
-                "viewport exact; aspect and field of view within 1e-6 relative", expected="none", hidden=hidden)
+                "viewport exact; aspect and field of view within 1e-6 relative", expected="none", hidden=hidden,
+                timeout=QUICK)
 
 
 def keys_test(name, points, presses, hidden=False) -> Test:
     return Test(name, "S7", points, "handle_key", {"presses": presses}, all_of(truth.key_checks()),
-                "exact", expected="none", hidden=hidden)
+                "exact", expected="none", hidden=hidden, timeout=QUICK)
 
 
 START = {"running": True, "shading": "gouraud", "slices": 32, "stacks": 32}
