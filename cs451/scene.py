@@ -67,7 +67,7 @@ class PointLight(Light):
         "Coordinates of `position`: 'world', or 'eye' for a light fixed to the camera "
         "(OpenGL's glLightfv under an identity modelview).", "world")
     ambient: Vec3 = field("Ambient colour (GL_AMBIENT).", (0.0, 0.0, 0.0), schema.non_negative)
-    diffuse: Vec3 = field("Diffuse colour (GL_DIFFUSE); also the intensity for ray tracing.", (1.0, 1.0, 1.0), schema.non_negative)
+    diffuse: Vec3 = field("Diffuse colour (GL_DIFFUSE; the default is GL_LIGHT0's, for every light); also the intensity for ray tracing.", (1.0, 1.0, 1.0), schema.non_negative)
     specular: Vec3 = field("Specular colour (GL_SPECULAR).", (1.0, 1.0, 1.0), schema.non_negative)
     attenuation: Vec3 = field("Constant, linear and quadratic attenuation factors.", (1.0, 0.0, 0.0), schema.non_negative)
 

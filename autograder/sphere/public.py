@@ -15,7 +15,7 @@ from cs451.scene import BUNDLED_DIR
 
 from autograder.sphere import truth
 
-#: Tolerance of the image tests: measured margin in assignments/01-sphere/README.md ("Tolerances").
+#: Tolerance of the image tests: the measured margin is in the kit README ("Tolerances").
 IMAGE = ImageTolerance(threshold=0.016, max_bad_fraction=0.01, shift=1)
 MATRIX_TOL = "entries within 1e-6 relative, 1e-9 absolute"
 #: Time limits per test: generous for clear numpy code (the reference takes under 0.2 s for each).
@@ -77,7 +77,7 @@ TESTS = [
     shader_test("S4 Gouraud: the handout's sphere, 500×500", "S4", 10, SPHERE_SCENE, (500, 500)),
     shader_test("S4 Gouraud: a 320×240 window", "S4", 5, SPHERE_SCENE, (320, 240)),
     shader_test("S5 Phong: the handout's sphere, 500×500", "S5", 8, SPHERE_SCENE, (500, 500)),
-    reshape_test("S6 reshape: square and wide windows", 3, width=500, height=500),
+    reshape_test("S6 reshape: the handout's square window", 3, width=500, height=500),
     reshape_test("S6 reshape: a wide window keeps the sphere round", 3, width=800, height=300),
     keys_test("S7 handle_key: q quits, s switches shading", 5,
               [["q", START], ["s", START], ["s", {**START, "shading": "phong"}], ["x", START]]),
