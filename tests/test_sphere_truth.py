@@ -260,7 +260,7 @@ SHININESS_ZERO = {
     ("two_lights", 128, (320, 240), 3 / 255, 0.15 / 255),
     ("backlit", 128, (240, 320), 3 / 255, 0.15 / 255),
     ("shininess_zero", 128, (200, 200), 3 / 255, 0.15 / 255),
-])
+], ids=["bundled-32", "bundled-128", "two_lights-128", "backlit-128", "shininess_zero-128"])
 def test03_phong_matches_the_lighting_equation_on_the_exact_sphere(impl, name, n, size, max_err, max_mean):
     data = {"two_lights": TWO_LIGHTS, "backlit": BACKLIT, "shininess_zero": SHININESS_ZERO}.get(name)
     if data is None:
