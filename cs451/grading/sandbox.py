@@ -172,7 +172,3 @@ def protect(*paths: Path) -> list[Path]:
             os.chmod(path, 0o700 if path.is_dir() else 0o600)
             done.append(path)
     return done
-
-
-def python() -> str:
-    return sys.executable
