@@ -91,7 +91,7 @@ class DirectionalLight(Light):
 class AreaLight(Light):
     corner: Vec3 = field("One corner of the rectangular light.")
     edge_u: Vec3 = field("First edge vector from the corner.", check=schema.nonzero_vector)
-    edge_v: Vec3 = field("Second edge vector from the corner.", check=schema.nonzero_vector)
+    edge_v: Vec3 = field("Second edge vector from the corner; the light emits on the side of edge_u × edge_v.", check=schema.nonzero_vector)
     radiance: Vec3 = field("Emitted radiance (linear RGB).", check=schema.non_negative)
     samples: int = field("Shadow rays per shading point (ray tracing).", 16, schema.positive)
 

@@ -1,13 +1,27 @@
-"""The registry of stages, found by name (as pbrt-v4 creates shapes by name in one factory)."""
+"""The registry of stages, found by name (as pbrt-v4 creates shapes by name in one factory).
+
+Every module in this package except ``base`` is a stage and defines ``STAGE``;
+adding a stage means adding its module, nothing else.  Modules are imported
+lazily because each stage pulls in its own GL or numba machinery.
+"""
 from __future__ import annotations
+
+import importlib
+import pkgutil
 
 from ..errors import KitError
 from .base import Stage
 
+_NOT_STAGES = {"base"}
+
+
+def _module_names() -> list[str]:
+    return [m.name for m in pkgutil.iter_modules(__path__) if m.name not in _NOT_STAGES and not m.name.startswith("_")]
+
 
 def _registry() -> dict[str, Stage]:
-    from . import sphere  # imported lazily: each stage pulls in its own GL or numba machinery
-    return {sphere.STAGE.name: sphere.STAGE}
+    stages = [importlib.import_module(f"{__name__}.{name}").STAGE for name in _module_names()]
+    return {s.name: s for s in sorted(stages, key=lambda s: s.number)}
 
 
 def stage_names() -> list[str]:
