@@ -117,7 +117,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(func=_cmd_starter)
 
     d = sub.add_parser("demo", help="the lecture demo: a window, or images without a display", description="Run a stage's demo.")
-    d.add_argument("stage", choices=["sphere"])
+    d.add_argument("stage", choices=stage_names())
     d.add_argument("--impl", default="reference", help="reference, starter, or a submission folder")
     d.add_argument("-o", "--output", default="demo", help="folder for the images when there is no display (default: demo)")
     d.add_argument("--window", action="store_true", help="open a window even if no display is detected")

@@ -26,10 +26,14 @@ def has_display() -> bool:
 def run_demo(*, stage: str = "sphere", impl: str = "reference", output: str | Path = "demo",
              window: bool | None = None, frames: int | None = None) -> list[Path]:
     """Open the window (``window=None``: when there is a display) or write the demo's images to ``output``."""
+    show_window = window if window is not None else has_display()
     if stage != "sphere":
-        raise KitError(f"no demo for stage {stage!r} yet (demos: sphere)")
+        st = get_stage(stage)
+        if st.demo is None:
+            raise KitError(f"no demo for stage {stage!r} yet")
+        return st.demo(load_impl(resolve_impl(impl, stage), stage), Path(output), show_window, frames)
     module = load_impl(resolve_impl(impl, stage), stage)
-    if window if window is not None else has_display():
+    if show_window:
         _sphere_window(module, frames)
         return []
     return _sphere_images(module, Path(output))

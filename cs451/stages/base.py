@@ -33,6 +33,8 @@ class Stage:
     tasks: tuple[Task, ...]
     render: Callable[..., Any]          # render(scene, impl, size=None, **opts) -> float image (h, w, 3)
     probes: dict[str, Callable[..., dict[str, np.ndarray]]] = field(default_factory=dict)
+    #: demo(module, output: Path, window: bool, frames: int | None) -> list[Path] of files written (none in a window)
+    demo: Callable[..., list] | None = None
 
     def task(self, task_id: str) -> Task:
         for t in self.tasks:
