@@ -86,6 +86,46 @@ def _cmd_bench(a: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_autograder(a: argparse.Namespace) -> int:
+    if a.action == "build":
+        from .packaging.gradescope import build_gradescope
+        print(f"wrote {build_gradescope(a.stage, a.output)} (upload it as the Gradescope autograder)")
+        return 0
+    if a.action == "warm":
+        from .packaging.answers import answer_files
+        print(f"{len(answer_files(a.stage, show_progress=True))} reference answers ready for {a.stage}")
+        return 0
+    if a.action == "run":
+        from .packaging.gradescope import run_gradescope
+        return run_gradescope(a.stage, a.submission, a.results)
+    raise KitError(f"unknown action {a.action}")
+
+
+def _cmd_passed(a: argparse.Namespace) -> int:
+    """Exit 0 when every test of a task passed in a results.json (one GitHub Classroom test per task)."""
+    import json
+    try:
+        tests = json.loads(Path(a.results).read_text())["tests"]
+    except (OSError, ValueError, KeyError, TypeError) as err:
+        raise KitError(f"{a.results}: not a results file ({err})") from None
+    mine = [t for t in tests if a.task in t.get("tags", [])]
+    for t in mine:
+        print(f"{t['number']} {t['status']:6} {t['score']:g}/{t['max_score']:g}  {t['name']}")
+        if t["status"] != "passed":
+            print(f"        {t['output'].splitlines()[0] if t['output'] else ''}")
+    if not mine:
+        print(f"no tests of task {a.task} in {a.results}")
+        return 1
+    return 0 if all(t["status"] == "passed" for t in mine) else 1
+
+
+def _cmd_release(a: argparse.Namespace) -> int:
+    from .packaging.release import build_release
+    out = build_release(a.stage, a.output)
+    print(f"wrote the student repository for {a.stage} to {out} (push it as the GitHub Classroom template)")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     from .stages import stage_names
     p = argparse.ArgumentParser(prog="cs451", description="cs451-kit: render, grade, and build the course's stages.")
@@ -127,6 +167,34 @@ def build_parser() -> argparse.ArgumentParser:
 
     sc = sub.add_parser("scenes", help="list the bundled scenes", description="List the bundled scenes.")
     sc.set_defaults(func=_cmd_scenes)
+
+    ag = sub.add_parser("autograder", help="build or run the Gradescope autograder",
+                        description="Gradescope: `build` writes the autograder zip; inside it, `warm` (setup.sh) "
+                                    "computes the reference answers once and `run` (run_autograder) grades one "
+                                    "submission; `passed` reads a results.json (GitHub Classroom).")
+    agsub = ag.add_subparsers(dest="action", required=True, metavar="ACTION")
+    agb = agsub.add_parser("build", help="write the Gradescope autograder zip for a stage")
+    agb.add_argument("stage", choices=stage_names())
+    agb.add_argument("-o", "--output", default="autograder.zip", help="zip file to write (default: autograder.zip)")
+    agw = agsub.add_parser("warm", help="compute the reference's answers to every test (setup.sh does this)")
+    agw.add_argument("stage", choices=stage_names())
+    agr = agsub.add_parser("run", help="grade one submission the Gradescope way (run_autograder does this)")
+    agr.add_argument("stage", choices=stage_names())
+    agr.add_argument("--submission", default="/autograder/submission")
+    agr.add_argument("--results", default="/autograder/results/results.json")
+    agp = agsub.add_parser("passed", help="exit 0 when every test of TASK passed in RESULTS")
+    agp.add_argument("results", help="a results.json written by `cs451 grade --results`")
+    agp.add_argument("task", help="a task ID, e.g. S1")
+    agp.set_defaults(func=_cmd_passed)
+    for p_ in (agb, agw, agr):
+        p_.set_defaults(func=_cmd_autograder)
+
+    rl = sub.add_parser("release", help="build the students' starter repository (GitHub Classroom template)",
+                        description="Write a repository for students: the starter, the handout, the public tests "
+                                    "with the reference's answers, and a workflow that runs them on push.")
+    rl.add_argument("stage", choices=stage_names())
+    rl.add_argument("-o", "--output", required=True, help="a new folder to write the repository into")
+    rl.set_defaults(func=_cmd_release)
 
     b = sub.add_parser("bench", help="time-against-error benchmarks", description="Run a stage's benchmark; prints a table and writes JSON.")
     b.add_argument("stage", choices=stage_names())

@@ -24,6 +24,12 @@ def resolve_impl(spec: str | Path, stage: str) -> Path:
     for candidate in (root / stage, root):
         if (candidate / "__init__.py").is_file():
             return candidate
+    nested = _nested_packages(root, stage)
+    if len(nested) == 1:  # an upload of a whole repository: <repo>/starter/sphere/, say
+        return nested[0]
+    if nested:
+        raise KitError(f"{root}: more than one '{stage}' package in it ({', '.join(str(p) for p in nested)}); "
+                       f"submit just one")
     raise KitError(f"{root}: no '{stage}' package here (expected {root / stage / '__init__.py'}; "
                    f"copy starter/{stage}/ and edit it)")
 
@@ -49,3 +55,24 @@ def load_impl(folder: Path, stage: str) -> ModuleType:
         del sys.modules[name]
         raise KitError(f"{folder}: importing the submission failed: {type(err).__name__}: {err}") from None
     return module
+
+
+def _nested_packages(root: Path, stage: str, depth: int = 3) -> list[Path]:
+    """Folders named ``stage`` holding an ``__init__.py`` up to ``depth`` levels below ``root``."""
+    found, level = [], [root]
+    for _ in range(depth):
+        nxt = []
+        for folder in level:
+            try:
+                children = [c for c in folder.iterdir() if c.is_dir() and not c.is_symlink()]
+            except OSError:
+                continue
+            for child in children:
+                if child.name.startswith(".") or child.name in ("__pycache__", "node_modules", "venv"):
+                    continue
+                if child.name == stage and (child / "__init__.py").is_file():
+                    found.append(child)
+                else:
+                    nxt.append(child)
+        level = nxt
+    return sorted(found)

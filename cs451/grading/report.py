@@ -39,6 +39,21 @@ def _status(r) -> tuple[str, str]:
     return ("part", "partly") if r.score > 0 else ("fail", "failed")
 
 
+def hidden_note(result: GradeResult, show_hidden: bool = False) -> str:
+    """One line counting the hidden tests a student cannot see (those held back, or not run in a public-only run)."""
+    held = [r for r in result.results if r.test.hidden and not show_hidden]
+    if held:
+        count, points = len(held), sum(r.test.points for r in held)
+        when = "graded now, shown after grades are published"
+    elif result.hidden_not_run.get("count"):
+        count, points = result.hidden_not_run["count"], result.hidden_not_run["points"]
+        when = "run after the deadline"
+    else:
+        return ""
+    return (f"{count} hidden test{'s' if count != 1 else ''} ({points:g} points), {when}; "
+            "they check the same tasks on other scenes, sizes and parameters.")
+
+
 def render_report(result: GradeResult, show_hidden: bool = True) -> str:
     """The report as HTML; with ``show_hidden=False`` hidden tests are counted, not shown (the student's view)."""
     esc = html.escape
@@ -50,10 +65,9 @@ def render_report(result: GradeResult, show_hidden: bool = True) -> str:
              f"<style>{STYLE}</style>",
              f"<h1>Stage {esc(result.stage)}: {score:g} / {total:g} points</h1>",
              f"<p class=muted>submission <code>{esc(result.submission)}</code>, graded in {result.seconds:.1f} s</p>"]
-    if hidden:
-        pts = sum(r.test.points for r in hidden)
-        parts.append(f"<p><b>{len(hidden)} hidden tests</b> ({pts:g} points), run after the deadline; "
-                     "they check the same tasks on other sizes, materials and lights.</p>")
+    note = hidden_note(result, show_hidden)
+    if note:
+        parts.append(f"<p><b>{esc(note)}</b></p>")
     if result.problems:
         parts.append("<h2>Problems found before testing</h2><ul>" +
                      "".join(f"<li>{esc(p)}</li>" for p in result.problems) + "</ul>")

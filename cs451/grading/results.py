@@ -7,28 +7,63 @@ and a list of ``tests`` each with ``score``, ``max_score``, ``status``, ``name``
 """
 from __future__ import annotations
 
+import html
 import json
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from .runner import GradeResult
 
 
 def to_gradescope(result: GradeResult) -> dict[str, Any]:
+    """Gradescope's results.json: per-test text output, and an HTML summary with thumbnails of failed image tests."""
     tests = []
     for r in result.results:
         t = r.test
         output = r.verdict.message
         if r.output.strip():
-            output += "\n\nYour code printed:\n" + r.output.strip()
+            output += "\n\nYour code printed:\n" + r.output.strip()[:MAX_PRINTED]
         tests.append({"score": r.score, "max_score": t.points, "status": "passed" if r.verdict.passed else "failed",
-                      "name": t.name, "number": t.number, "output": output, "tags": [t.task],
-                      "visibility": t.visibility})
-    summary = f"{result.score:g} / {result.max_score:g} points"
-    if result.problems:
-        summary += "\nProblems found before testing:\n" + "\n".join(f"- {p}" for p in result.problems)
-    return {"score": round(result.score, 4), "execution_time": round(result.seconds, 2), "output": summary,
+                      "name": t.name, "number": t.number, "output": output, "output_format": "text",
+                      "tags": [t.task], "visibility": t.visibility})
+    return {"score": round(result.score, 4), "execution_time": round(result.seconds, 2),
+            "output": _summary_html(result), "output_format": "html",
             "visibility": "visible", "stdout_visibility": "hidden", "tests": tests}
+
+
+#: Characters of a test's printed output kept in results.json (Gradescope pages get slow beyond that).
+MAX_PRINTED = 4000
+#: Thumbnails in the Gradescope summary are at most this many pixels wide and tall.
+THUMBNAIL = 160
+
+
+def _summary_html(result: GradeResult) -> str:
+    from PIL import Image as PILImage
+    from .report import _png_data_uri, hidden_note
+    esc = html.escape
+    visible = [r for r in result.results if not r.test.hidden]
+    score, total = sum(r.score for r in visible), sum(r.test.points for r in visible)
+    parts = [f"<p><b>{score:g} / {total:g} points</b> on the tests you can see now.</p>"]
+    note = hidden_note(result, show_hidden=False)
+    if note:
+        parts.append(f"<p>{esc(note)}</p>")
+    if result.problems:
+        parts.append("<p>Problems found before testing:</p><ul>" +
+                     "".join(f"<li>{esc(p)}</li>" for p in result.problems) + "</ul>")
+    for r in visible:
+        if r.verdict.passed or not r.verdict.images:
+            continue
+        parts.append(f"<p>{esc(r.test.number)} {esc(r.test.name)}: {esc(r.verdict.message)}</p><p>")
+        for key in ("reference", "submission", "error"):
+            if key in r.verdict.images:
+                img = PILImage.fromarray(r.verdict.images[key])
+                img.thumbnail((THUMBNAIL, THUMBNAIL))
+                parts.append(f"<img alt='{key}' title='{key}' src='{_png_data_uri(np.asarray(img))}'> ")
+        parts.append("</p>")
+    parts.append(f"<p>Graded {esc(result.isolation or 'in a sandbox')}.</p>")
+    return "\n".join(parts)
 
 
 def write_results(path: str | Path, result: GradeResult) -> Path:
@@ -57,16 +92,25 @@ def format_table(result: GradeResult, width: int = 100) -> str:
         acc[1] += r.test.points
     lines.append("by task: " + "  ".join(f"{k} {v[0]:g}/{v[1]:g}" for k, v in by_task.items()))
     lines.append(f"total: {result.score:g} / {result.max_score:g}   ({result.seconds:.1f} s)")
+    if result.hidden_not_run.get("count"):
+        from .report import hidden_note
+        lines.append(f"not run here: {hidden_note(result)}")
     for p in result.problems:
         lines.append(f"problem: {p}")
     return "\n".join(lines)
 
 
-def write_failure(path: str | Path, reason: str) -> Path:
-    """The results file when grading itself could not finish: zero points, and why."""
+def write_failure(path: str | Path, reason: str, blame_submission: bool = False) -> Path:
+    """The results file when grading could not finish: zero points, and why.
+
+    ``blame_submission``: the upload itself is unusable (no stage package in it), which the student can fix.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps({"score": 0, "output": f"The autograder could not finish: {reason}\n"
-                                "This is not a verdict on your code; tell your instructor.",
-                                "visibility": "visible", "tests": []}, indent=2))
+    if blame_submission:
+        text = f"Your submission could not be graded: {reason}"
+    else:
+        text = (f"The autograder could not finish: {reason}\n"
+                "This is not a verdict on your code; tell your instructor.")
+    path.write_text(json.dumps({"score": 0, "output": text, "visibility": "visible", "tests": []}, indent=2))
     return path

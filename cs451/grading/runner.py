@@ -88,31 +88,57 @@ def run_probe(stage: str, impl_dir: Path, probe: str, params: dict[str, Any],
 # --- reference answers, cached ------------------------------------------------
 
 def _tree_hash(*folders: Path) -> str:
+    """A version of the code that answers probes; independent of where the tree lives, so answers
+    computed when an autograder is built stay valid where it is unpacked."""
     h = hashlib.sha256()
     for folder in folders:
         for path in sorted(folder.rglob("*.py")):
             if "__pycache__" not in path.parts:
-                h.update(path.as_posix().encode())
+                h.update(path.relative_to(folder).as_posix().encode())
                 h.update(path.read_bytes())
     return h.hexdigest()[:16]
 
 
+def answer_key(probe: str, params: dict[str, Any], inputs: Outputs | None = None) -> str:
+    """The file name of the answer to a probe: the same in the cache and in a student copy's packaged answers."""
+    key = hashlib.sha256(json.dumps([probe, params, sorted(inputs or {})], sort_keys=True).encode()).hexdigest()[:20]
+    return f"{probe}-{key}.npz"
+
+
+def packaged_answers_dir(stage: str) -> Path:
+    """Where a student copy (without reference/) keeps the reference's answers to the public tests."""
+    return KIT_ROOT / "autograder" / stage / "answers"
+
+
 class ReferenceAnswers:
-    """The reference's answers to probes, computed once in a worker and kept on disk."""
+    """The reference's answers to probes, computed once in a worker and kept on disk.
+
+    In a student copy there is no reference/: the answers to the public tests ship
+    in ``autograder/<stage>/answers/`` instead (written by ``cs451 release``).
+    """
 
     def __init__(self, stage: str, cache_dir: Path | None = None):
         self.stage = stage
+        if not (KIT_ROOT / "reference" / stage).is_dir() and packaged_answers_dir(stage).is_dir():
+            self.impl = None
+            self.dir = packaged_answers_dir(stage)
+            return
         self.impl = resolve_impl("reference", stage)
         version = _tree_hash(self.impl, KIT_ROOT / "cs451")
         self.dir = (cache_dir or KIT_ROOT / ".cs451-cache") / "reference" / stage / version
         self.dir.mkdir(parents=True, exist_ok=True)
 
+    def path(self, probe: str, params: dict[str, Any], inputs: Outputs | None = None) -> Path:
+        return self.dir / answer_key(probe, params, inputs)
+
     def get(self, probe: str, params: dict[str, Any], inputs: Outputs | None = None) -> Outputs:
-        key = hashlib.sha256(json.dumps([probe, params, sorted(inputs or {})], sort_keys=True).encode()).hexdigest()[:20]
-        path = self.dir / f"{probe}-{key}.npz"
+        path = self.path(probe, params, inputs)
         if path.exists():
             with np.load(path, allow_pickle=False) as data:
                 return {k: data[k] for k in data.files}
+        if self.impl is None:
+            raise KitError(f"this copy of the kit has no reference answer for probe {probe!r} "
+                           f"(its answers in {self.dir} are older than the test; ask for an updated copy)")
         result = run_probe(self.stage, self.impl, probe, params, inputs, timeout=300, trusted=True)
         if not result.ok:
             raise KitError(f"the reference failed on probe {probe} {params}: {result.error}\n{result.output}")
@@ -130,6 +156,24 @@ def _load_spec_module(stage: str, name: str) -> ModuleType | None:
     if str(KIT_ROOT) not in sys.path:
         sys.path.insert(0, str(KIT_ROOT))
     return importlib.import_module(f"autograder.{stage}.{name}")
+
+
+def hidden_summary(stage: str) -> dict[str, Any]:
+    """How many hidden tests there are and what they are worth, without what they check.
+
+    From hidden.py where it exists (the instructor's copy), else from the summary
+    a student copy ships (``autograder/<stage>/hidden.json``, written by ``cs451 release``).
+    """
+    hidden = _load_spec_module(stage, "hidden")
+    if hidden is not None:
+        by_task: dict[str, float] = {}
+        for t in hidden.TESTS:
+            by_task[t.task] = by_task.get(t.task, 0.0) + t.points
+        return {"count": len(hidden.TESTS), "points": sum(by_task.values()), "by_task": by_task}
+    path = KIT_ROOT / "autograder" / stage / "hidden.json"
+    if path.exists():
+        return json.loads(path.read_text())
+    return {"count": 0, "points": 0.0, "by_task": {}}
 
 
 def load_tests(stage: str, include_hidden: bool = True) -> list[Test]:
@@ -170,6 +214,7 @@ class GradeResult:
     problems: list[str] = field(default_factory=list)   # interface problems found before the tests ran
     seconds: float = 0.0
     isolation: str = ""                                  # how the submission was isolated, for the report
+    hidden_not_run: dict[str, Any] = field(default_factory=dict)  # hidden_summary() when only public tests ran
 
     @property
     def score(self) -> float:
@@ -217,6 +262,8 @@ def grade(stage: str, submission: str | Path, include_hidden: bool = True, show_
         tests = [Test(**{**t.__dict__, "timeout": test_timeout}) for t in tests]
     impl_dir = resolve_impl(submission, stage)
     out = GradeResult(stage, str(submission))
+    if not include_hidden:
+        out.hidden_not_run = hidden_summary(stage)
     reference = ReferenceAnswers(stage)
     problem = sandbox.isolation_problem(impl_dir)
     drop = sandbox.is_root() and problem is None

@@ -96,6 +96,11 @@ def _preexec(limits: Limits, ids: tuple[int, int] | None, nproc: int) -> None:  
     resource.setrlimit(resource.RLIMIT_AS, (limits.memory_bytes, limits.memory_bytes))
     resource.setrlimit(resource.RLIMIT_FSIZE, (limits.file_bytes, limits.file_bytes))
     resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+    try:  # under a container's memory cap (Gradescope: 768 MB) the kernel's OOM killer takes the worker first
+        with open("/proc/self/oom_score_adj", "w") as f:
+            f.write("1000")
+    except OSError:
+        pass
     if ids is not None:
         try:  # no network: a new, empty network namespace (needs CAP_SYS_ADMIN; skipped where refused)
             ctypes.CDLL(None, use_errno=True).unshare(CLONE_NEWNET)
@@ -113,7 +118,9 @@ def worker_env(home: Path) -> dict[str, str]:
             "GALLIUM_DRIVER", "LP_NUM_THREADS", "__EGL_VENDOR_LIBRARY_FILENAMES", "MESA_SHADER_CACHE_DISABLE")
     env = {k: os.environ[k] for k in keep if k in os.environ}
     env.setdefault("EGL_PLATFORM", "surfaceless")
+    from .. import KIT_ROOT
     env.update(HOME=str(home), TMPDIR=str(home), PYTHONDONTWRITEBYTECODE="1", PYTHONHASHSEED="0",
+               PYTHONPATH=str(KIT_ROOT),  # the worker runs the same engine as the grader, wherever it is installed
                OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MESA_SHADER_CACHE_DISABLE="true",
                NUMBA_CACHE_DIR=str(home))
     return env

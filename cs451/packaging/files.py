@@ -1,0 +1,26 @@
+"""Copying parts of the kit tree without the build litter (caches, virtual environments, bytecode)."""
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+from .. import KIT_ROOT
+
+LITTER = shutil.ignore_patterns("__pycache__", "*.pyc", ".pytest_cache", "*.egg-info", ".cs451-cache", "*.png~")
+
+
+def copy_tree(rel: str, dest_root: Path, ignore=LITTER) -> Path:
+    """Copy ``KIT_ROOT/rel`` (a file or a folder) to ``dest_root/rel``."""
+    src, dst = KIT_ROOT / rel, dest_root / rel
+    dst.parent.mkdir(parents=True, exist_ok=True)
+    if src.is_dir():
+        shutil.copytree(src, dst, ignore=ignore, dirs_exist_ok=True)
+    else:
+        shutil.copy2(src, dst)
+    return dst
+
+
+def write_executable(path: Path, text: str) -> Path:
+    path.write_text(text)
+    path.chmod(0o755)
+    return path

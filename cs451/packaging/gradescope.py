@@ -1,0 +1,124 @@
+"""``cs451 autograder build``: the zip Gradescope runs, and ``cs451 autograder run``, what runs inside it.
+
+Gradescope's contract (Ubuntu 22.04, no GPU, 768 MB, 10 minutes by default): the
+zip holds ``setup.sh`` (run once, as root, when the image is built) and
+``run_autograder`` (run for each submission, as root), which must leave
+``/autograder/results/results.json``. The kit installs itself into its own folder
+(``/opt/cs451-kit``) so that the unprivileged worker can read the engine while
+the reference and hidden tests stay at mode 0700.
+"""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+import time
+import zipfile
+from pathlib import Path
+
+from .. import KIT_ROOT, __version__
+from ..errors import KitError
+from ..grading.runner import load_tests
+from ..stages import get_stage
+from .files import LITTER, copy_tree, write_executable
+
+#: Seconds the whole grading may take inside Gradescope's default 10-minute limit (the rest: start-up and margin).
+GRADESCOPE_BUDGET = 480.0
+
+SETUP_SH = """#!/usr/bin/env bash
+# Gradescope runs this once, as root, when it builds the autograder image (Ubuntu 22.04, no GPU).
+# Built by `cs451 autograder build {stage}` (cs451-kit {version}); do not edit, rebuild instead.
+set -euo pipefail
+SOURCE="$(cd "$(dirname "$0")" && pwd)"           # /autograder/source
+KIT="${{CS451_HOME:-/opt/cs451-kit}}"              # outside /autograder: the unprivileged worker reads the engine here
+export DEBIAN_FRONTEND=noninteractive
+apt-get update -qq
+apt-get install -y -qq --no-install-recommends python3 python3-venv python3-pip \\
+    libegl1 libegl-mesa0 libgl1-mesa-dri libglu1-mesa >/dev/null
+rm -rf "$KIT" && mkdir -p "$KIT" && cp -a "$SOURCE/." "$KIT/"
+/usr/bin/python3 -m venv "$KIT/.venv"
+"$KIT/.venv/bin/python" -m pip install -q --upgrade pip
+"$KIT/.venv/bin/python" -m pip install -q -e "$KIT"
+chmod -R a+rX "$KIT"                              # the grader locks reference/ and autograder/ before each run
+cd "$KIT" && "$KIT/.venv/bin/python" -m cs451 autograder warm {stage}   # reference answers, once per image
+"""
+
+RUN_AUTOGRADER = """#!/usr/bin/env bash
+# Gradescope runs this for every submission, as root. It always leaves results/results.json.
+ROOT="${{AUTOGRADER_ROOT:-/autograder}}"
+KIT="${{CS451_HOME:-/opt/cs451-kit}}"
+PY="${{CS451_PYTHON:-$KIT/.venv/bin/python}}"
+mkdir -p "$ROOT/results"
+cd "$KIT" && "$PY" -m cs451 autograder run {stage} --submission "$ROOT/submission" \\
+    --results "$ROOT/results/results.json"
+status=$?
+if [ ! -s "$ROOT/results/results.json" ]; then   # the grader itself died: still leave a result, and say so
+  printf '{{"score": 0, "output": "The autograder stopped unexpectedly (exit %s). This is not a verdict on your code; tell your instructor.", "tests": []}}' "$status" > "$ROOT/results/results.json"
+fi
+exit 0
+"""
+
+
+def build_gradescope(stage: str, output: str | Path) -> Path:
+    """Write the Gradescope autograder zip for ``stage``; returns its path."""
+    st = get_stage(stage)
+    tests = load_tests(stage)  # fails here, not on Gradescope, if a spec is broken
+    output = Path(output)
+    with tempfile.TemporaryDirectory(prefix="cs451-gradescope-") as tmp:
+        root = Path(tmp)
+        for rel in ("cs451", "reference", "autograder", "pyproject.toml", "README.md"):
+            copy_tree(rel, root, ignore=shutil.ignore_patterns(*_litter_patterns(), "answers"))
+        write_executable(root / "setup.sh", SETUP_SH.format(stage=stage, version=__version__))
+        write_executable(root / "run_autograder", RUN_AUTOGRADER.format(stage=stage))
+        manifest = {"stage": stage, "title": st.title, "kit_version": __version__,
+                    "built": time.strftime("%Y-%m-%d %H:%M:%S"), "tests": len(tests),
+                    "hidden_tests": sum(t.hidden for t in tests), "points": sum(t.points for t in tests),
+                    "time_budget_s": GRADESCOPE_BUDGET}
+        (root / "autograder.json").write_text(json.dumps(manifest, indent=2) + "\n")
+        output.parent.mkdir(parents=True, exist_ok=True)
+        with zipfile.ZipFile(output, "w", zipfile.ZIP_DEFLATED) as zf:
+            for path in sorted(root.rglob("*")):
+                if path.is_file():
+                    info = zipfile.ZipInfo.from_file(path, path.relative_to(root).as_posix())
+                    info.compress_type = zipfile.ZIP_DEFLATED
+                    zf.writestr(info, path.read_bytes())
+    return output
+
+
+def _litter_patterns() -> tuple[str, ...]:
+    return ("__pycache__", "*.pyc", ".pytest_cache", "*.egg-info", ".cs451-cache")
+
+
+def stage_submission(submission: Path, stage: str) -> Path:
+    """Copy what the student uploaded into a folder the unprivileged worker can read, without litter."""
+    if not submission.is_dir():
+        raise KitError(f"{submission}: no submission folder")
+    dest = Path(tempfile.mkdtemp(prefix=f"cs451-submission-{stage}-"))
+    os.chmod(dest, 0o755)
+    shutil.copytree(submission, dest / "submission", ignore=LITTER, symlinks=False)
+    for folder, dirs, files in os.walk(dest):
+        for name in dirs:
+            os.chmod(Path(folder) / name, 0o755)
+        for name in files:
+            os.chmod(Path(folder) / name, 0o644)
+    return dest / "submission"
+
+
+def run_gradescope(stage: str, submission: str | Path, results: str | Path,
+                   budget: float = GRADESCOPE_BUDGET) -> int:
+    """Grade one Gradescope submission into ``results`` (results.json); always writes it."""
+    from ..grading.results import write_failure, write_results
+    from ..grading.runner import grade
+    results = Path(results)
+    try:
+        copy = stage_submission(Path(submission), stage)
+        result = grade(stage, copy, include_hidden=True, show_progress=False, jobs=1, total_timeout=budget)
+    except KitError as err:  # nothing gradable was uploaded: say what is expected
+        write_failure(results, str(err), blame_submission=True)
+        return 0
+    except BaseException as err:
+        write_failure(results, f"{type(err).__name__}: {err}")
+        raise
+    write_results(results, result)
+    return 0

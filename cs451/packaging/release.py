@@ -1,0 +1,154 @@
+"""``cs451 release``: the starter repository students clone (a GitHub Classroom template).
+
+It holds the engine, the student's package (the starter), the handout, the public
+tests with the reference's answers to them, a count of the hidden tests, and a
+workflow that runs the public tests on every push. It never holds the reference,
+the hidden tests or their answers; a test checks that.
+"""
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+from .. import KIT_ROOT
+from ..errors import KitError
+from ..grading.runner import hidden_summary, load_tests
+from ..stages import get_stage
+from .answers import export_answers
+from .files import LITTER, copy_tree, write_executable
+
+WORKFLOW_HEADER = """# Runs the public tests of stage {stage} on every push (GitHub Classroom autograding).
+# Built by `cs451 release {stage}`; the points per task are the public tests' points.
+name: Autograding Tests
+on: [push, workflow_dispatch, repository_dispatch]
+permissions:
+  checks: write
+  actions: read
+  contents: read
+jobs:
+  run-autograding-tests:
+    runs-on: ubuntu-22.04
+    if: github.actor != 'github-classroom[bot]'
+    steps:
+      - name: Checkout code
+        uses: actions/checkout@v4
+      - name: Set up the kit (Mesa's EGL for headless OpenGL, a Python virtual environment)
+        run: ./setup.sh
+      - name: Grade the public tests (the same as `cs451 grade {stage} --submission . --public-only`)
+        run: .venv/bin/python -m cs451 grade {stage} --submission . --public-only --results results.json --report report --student-view
+      - name: Keep the image report (reference, yours, difference, error map)
+        if: always()
+        uses: actions/upload-artifact@v4
+        with:
+          name: cs451-report
+          path: report/
+"""
+
+WORKFLOW_TASK = """      - name: {id} {title}
+        id: {step}
+        uses: classroom-resources/autograding-command-grader@v1
+        with:
+          test-name: {id} {title}
+          setup-command: ''
+          command: .venv/bin/python -m cs451 autograder passed results.json {id}
+          timeout: 1
+          max-score: {points:g}
+"""
+
+WORKFLOW_REPORTER = """      - name: Autograding Reporter
+        uses: classroom-resources/autograding-grading-reporter@v1
+        env:
+{env}
+        with:
+          runners: {runners}
+"""
+
+README = """# {title}
+
+This is your repository for stage {number} of the course: the kit's engine, your package
+`{stage}/` (the starter: every function you write raises `NotImplementedError` with a hint),
+and the handout, [`{handout}`]({handout}). Read the handout first.
+
+## Set up (once)
+```
+./setup.sh                                  # Mesa's EGL driver and a Python virtual environment
+source .venv/bin/activate                   # then the `cs451` command is on your PATH
+```
+
+## Work and check yourself
+```
+cs451 grade {stage} --submission . --public-only --report report    # the public tests; open report/report.html
+cs451 render {scene} --impl . -o mine.png                             # your render of a bundled scene
+```
+The public tests compare your answers with the reference's, shipped in
+`autograder/{stage}/answers/` (you cannot see the reference's code). {hidden}
+
+Every push runs the public tests on GitHub (the Actions tab) and keeps the image report as an artifact.
+"""
+
+
+def workflow_text(stage: str) -> str:
+    """The GitHub Actions workflow: grade once, then one Classroom test per task worth its public points."""
+    st = get_stage(stage)
+    public = [t for t in load_tests(stage, include_hidden=False)]
+    points = {task.id: sum(t.points for t in public if t.task == task.id) for task in st.tasks}
+    text = WORKFLOW_HEADER.format(stage=stage)
+    steps = []
+    for task in st.tasks:
+        if points[task.id] <= 0:
+            continue
+        step = task.id.lower()
+        steps.append(step)
+        text += WORKFLOW_TASK.format(id=task.id, title=task.title, step=step, points=points[task.id])
+    env = "\n".join(f'          {s.upper()}_RESULTS: "${{{{steps.{s}.outputs.result}}}}"' for s in steps)
+    return text + WORKFLOW_REPORTER.format(env=env, runners=",".join(steps))
+
+
+def _setup_script(stage: str) -> str:
+    """The kit's setup.sh, ending with what a student does next instead of the kit's main job."""
+    text = (KIT_ROOT / "setup.sh").read_text()
+    cut = text.find("# The main job")
+    if cut < 0:
+        raise KitError("setup.sh: no '# The main job' section to replace")
+    lines = text[:cut].splitlines(keepends=True)
+    first_code = next(i for i, line in enumerate(lines) if i > 0 and not line.startswith("#"))
+    body = lines[first_code:]  # the kit's header comment talks of its main job
+    header = ["#!/usr/bin/env bash\n",
+              "# One command for a fresh Debian/Ubuntu machine: installs what this repository needs.\n",
+              "# Safe to run again; it skips what is already there.\n"]
+    return "".join(header + body) + (f"echo 'next: .venv/bin/cs451 grade {stage} --submission . --public-only "
+                                     f"(see README.md)'\n")
+
+
+def build_release(stage: str, output: str | Path) -> Path:
+    """Write the student repository for ``stage`` into the folder ``output`` (which must not exist)."""
+    st = get_stage(stage)
+    out = Path(output)
+    if out.exists() and any(out.iterdir()):
+        raise KitError(f"{out}: exists and is not empty; choose a new folder")
+    starter = KIT_ROOT / "starter" / stage
+    if not starter.is_dir():
+        raise KitError(f"starter/{stage}: missing; run `cs451 starter` first")
+    out.mkdir(parents=True, exist_ok=True)
+    for rel in ("cs451", "pyproject.toml", f"assignments/{st.handout}", "autograder/__init__.py"):
+        copy_tree(rel, out)
+    shutil.copytree(starter, out / stage, ignore=LITTER)
+    spec_dir = KIT_ROOT / "autograder" / stage
+    shutil.copytree(spec_dir, out / "autograder" / stage,
+                    ignore=shutil.ignore_patterns("hidden.py", "answers", "__pycache__", "*.pyc"))
+    public = load_tests(stage, include_hidden=False)
+    export_answers(stage, public, out / "autograder" / stage / "answers")
+    hidden = hidden_summary(stage)
+    (out / "autograder" / stage / "hidden.json").write_text(json.dumps(hidden, indent=2) + "\n")
+    write_executable(out / "setup.sh", _setup_script(stage))
+    workflow = out / ".github" / "workflows" / "classroom.yml"
+    workflow.parent.mkdir(parents=True)
+    workflow.write_text(workflow_text(stage))
+    hidden_line = (f"After the deadline {hidden['count']} hidden tests ({hidden['points']:g} points) check the "
+                   "same tasks on scenes and parameters you have not seen." if hidden["count"] else "")
+    scene = stage if (KIT_ROOT / "cs451" / "scenes" / f"{stage}.json").exists() else "cornell-box"
+    (out / "README.md").write_text(README.format(title=st.title, number=st.number, stage=stage, scene=scene,
+                                                 handout=f"assignments/{st.handout}/README.md", hidden=hidden_line))
+    (out / ".gitignore").write_text(".venv/\n__pycache__/\n*.egg-info/\n.cs451-cache/\nreport/\nresults.json\n*.png\n")
+    return out
