@@ -1,0 +1,123 @@
+"""``cs451 bench autograder``: what grading one submission costs, per stage, against Gradescope's limits.
+
+Each stage's Gradescope zip is built and unpacked into a layout like Gradescope's,
+its reference answers warmed (as setup.sh does once per image), then its own
+``run_autograder`` grades the reference and the starter. Peak memory is the sum
+of the resident memory of the grader and all its workers, sampled every 20 ms:
+what a container's memory cap (Gradescope: 768 MB) sees.
+"""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import zipfile
+from pathlib import Path
+
+from cs451 import KIT_ROOT
+from cs451.packaging.gradescope import GRADESCOPE_BUDGET, build_gradescope
+from cs451.stages import stage_names
+
+GRADESCOPE_MEMORY_MB = 768
+
+
+def _tree_rss_mb(pid: int) -> float:
+    """Resident memory of a process and all its descendants, from /proc."""
+    children: dict[int, list[int]] = {}
+    rss: dict[int, int] = {}
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+            children.setdefault(int(fields[1]), []).append(int(entry))
+            rss[int(entry)] = int(fields[21]) * os.sysconf("SC_PAGE_SIZE")
+        except (OSError, IndexError, ValueError):
+            continue
+    total, todo = 0, [pid]
+    while todo:
+        p = todo.pop()
+        total += rss.get(p, 0)
+        todo += children.get(p, [])
+    return total / 2**20
+
+
+def _run_measured(args: list[str], env: dict) -> tuple[float, float, int]:
+    start = time.perf_counter()
+    proc = subprocess.Popen(args, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    peak = 0.0
+    stop = threading.Event()
+
+    def sample():
+        nonlocal peak
+        while not stop.is_set():
+            peak = max(peak, _tree_rss_mb(proc.pid))
+            time.sleep(0.02)
+    sampler = threading.Thread(target=sample)
+    sampler.start()
+    code = proc.wait()
+    stop.set()
+    sampler.join()
+    return time.perf_counter() - start, peak, code
+
+
+def _layout(stage: str, top: Path) -> Path:
+    root = top / "autograder"
+    (root / "source").mkdir(parents=True)
+    with zipfile.ZipFile(build_gradescope(stage, top / "autograder.zip")) as zf:
+        zf.extractall(root / "source")
+    for script in ("setup.sh", "run_autograder"):
+        (root / "source" / script).chmod(0o755)
+    for path in [top, root, *root.rglob("*")]:
+        if path.is_dir():
+            path.chmod(0o755)
+    return root
+
+
+def measure(stage: str) -> list[dict]:
+    top = Path(tempfile.mkdtemp(prefix=f"cs451-bench-{stage}-"))
+    os.chmod(top, 0o755)
+    try:
+        root = _layout(stage, top)
+        env = {**os.environ, "AUTOGRADER_ROOT": str(root), "CS451_HOME": str(root / "source"),
+               "CS451_PYTHON": sys.executable}
+        t0 = time.perf_counter()
+        subprocess.run([sys.executable, "-m", "cs451", "autograder", "warm", stage], cwd=root / "source",
+                       check=True, capture_output=True)
+        warm_s = time.perf_counter() - t0
+        rows = []
+        for who in ("reference", "starter"):
+            for sub in ("submission", "results"):
+                shutil.rmtree(root / sub, ignore_errors=True)
+                (root / sub).mkdir()
+                (root / sub).chmod(0o755)
+            shutil.copytree(KIT_ROOT / who / stage, root / "submission" / stage)
+            seconds, peak, code = _run_measured([str(root / "source" / "run_autograder")], env)
+            results = json.loads((root / "results" / "results.json").read_text())
+            rows.append({"stage": stage, "submission": who, "score": results.get("score"),
+                         "tests": len(results.get("tests", [])), "seconds": round(seconds, 1),
+                         "peak_mb": round(peak), "warm_s": round(warm_s, 1), "exit": code})
+        return rows
+    finally:
+        shutil.rmtree(top, ignore_errors=True)
+
+
+def main(output: Path, quick: bool = False) -> None:
+    stages = [s for s in stage_names() if (KIT_ROOT / "autograder" / s / "public.py").exists()
+              and (KIT_ROOT / "starter" / s).is_dir()]
+    rows = [row for s in stages for row in measure(s)]
+    print(f"Grading one submission with the Gradescope zip's run_autograder (budget {GRADESCOPE_BUDGET:g} s of "
+          f"Gradescope's 600 s, {GRADESCOPE_MEMORY_MB} MB); warm = setup.sh's one-off reference answers")
+    print(f"{'stage':<10} {'submission':<10} {'score':>6} {'tests':>5} {'seconds':>8} {'peak MB':>8} {'warm s':>7}")
+    for r in rows:
+        print(f"{r['stage']:<10} {r['submission']:<10} {r['score']:>6g} {r['tests']:>5} {r['seconds']:>8.1f} "
+              f"{r['peak_mb']:>8} {r['warm_s']:>7.1f}")
+    output.mkdir(parents=True, exist_ok=True)
+    (output / "autograder.json").write_text(json.dumps({"machine_cpus": os.cpu_count(), "rows": rows}, indent=2))
+    print(f"wrote {output / 'autograder.json'}")
