@@ -197,8 +197,9 @@ def build_parser() -> argparse.ArgumentParser:
     rl.set_defaults(func=_cmd_release)
 
     b = sub.add_parser("bench", help="time-against-error benchmarks", description="Run a stage's benchmark; prints a table and writes JSON.")
-    b.add_argument("stage", choices=stage_names() + ["autograder"],
-                   help="a stage, or 'autograder' (grading time and memory per stage, against Gradescope's limits)")
+    b.add_argument("stage", choices=stage_names() + ["autograder", "tolerance"],
+                   help="a stage; 'autograder' (grading time and memory per stage, against Gradescope's limits); "
+                        "'tolerance' (image tests' spread across rasterisers and thread counts)")
     b.add_argument("-o", "--output", default="bench-results", help="folder for the JSON and plots (default: bench-results)")
     b.add_argument("--quick", action="store_true", help="fewer repetitions")
     b.set_defaults(func=_cmd_bench)

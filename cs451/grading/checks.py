@@ -46,6 +46,7 @@ def image_matches(tol: ImageTolerance, key: str = "image") -> Check:
         detail = {"bad_fraction": result.bad_fraction, "max_error": result.max_error, "mean_error": result.mean_error}
         msg = ("image matches: " if result.passed else "image differs: ") + result.message
         return Verdict(1.0 if result.passed else 0.0, msg, images, detail)
+    check.tolerance = tol  # for `cs451 bench tolerance`, which measures the margin
     return check
 
 
