@@ -1,0 +1,584 @@
+"""The form-factor engine (hemicubes on the rasteriser, and Monte Carlo ray casting); relied on by stage 3's grader, render and bench and by stage 4 (radiosity).
+
+``HemicubeFormFactors(quads, impl)`` computes rows F_i· of the form-factor
+matrix of planar patches (``cs451.patches``: (n, 4, 3) quads, counter-clockwise
+seen from the front) with the hemicube of Cohen & Greenberg (1985). It holds no
+solution: the delta form-factor tables, the five views, the projections, the
+item-buffer shaders, the row sum and the point-to-polygon form factor all come
+from ``impl``, a loaded stage-3 implementation (the reference or a student's).
+
+How it is fast: the scene's triangles go to the GPU once; every hemicube face
+of a batch of patches is one *instance* of a single instanced draw, placed into
+its tile of one R32UI atlas (clip distances keep it inside the tile), so a batch
+of hundreds of hemicubes costs one draw call and one read-back; each tile is
+summed with ``np.bincount`` (the student's H5). Rows are computed only when asked
+and cached; only geometry enters, so changing colours, albedos or emission
+reuses every row. Patches behind or in a shooter's plane are counted as culled
+(the clipper discards them); a patch seen from behind hides what is behind it and
+receives nothing (H4).
+
+Proximity: the hemicube treats the shooter as a point at its centre, an error
+no resolution fixes when another patch is close to it. With ``proximity="contour"``
+the form factor to every close patch j is replaced by the area average over the
+shooter (Gauss points) of the exact point-to-polygon form factor (H6, Lambert's
+contour formula) times the fraction of j that the hemicube found visible.
+"""
+from __future__ import annotations
+
+import time
+from typing import Any, Iterable
+
+import numpy as np
+
+from .errors import KitError
+from .patches import as_quads, patch_areas, patch_centers, patch_normals, patch_triangles
+from .stages import hemicube as H
+
+#: Put in front of the student's vertex shader (H4); the kit defines the two functions after it.
+VERTEX_INTERFACE = """#version 330
+in vec3 in_position;          // a corner of a patch, world coordinates
+in uint in_id;                // the index of its patch, 0 .. n-1
+mat4 hemicube_view();         // this face's view matrix (H2)
+mat4 hemicube_projection();   // this face's projection (H3)
+"""
+FRAGMENT_INTERFACE = """#version 330
+out uint item;                // 0: no patch; k + 1: patch k
+"""
+#: After the student's vertex shader: the instance's matrices, and its placement into the atlas tile.
+_VERTEX_ENGINE = """
+#undef main
+uniform sampler2D u_faces;          // per instance (shooter × face): 4 columns of the view, then the tile rectangle
+uniform mat4 u_projections[2];      // top, side
+out float gl_ClipDistance[4];
+mat4 hemicube_view() {
+    return mat4(texelFetch(u_faces, ivec2(0, gl_InstanceID), 0), texelFetch(u_faces, ivec2(1, gl_InstanceID), 0),
+                texelFetch(u_faces, ivec2(2, gl_InstanceID), 0), texelFetch(u_faces, ivec2(3, gl_InstanceID), 0));
+}
+mat4 hemicube_projection() { return u_projections[(gl_InstanceID % 5) == 0 ? 0 : 1]; }
+void main() {
+    item_main();
+    vec4 c = gl_Position;
+    vec4 rect = texelFetch(u_faces, ivec2(4, gl_InstanceID), 0);   // x0, y0, x1, y1 in the atlas's NDC
+    gl_ClipDistance[0] = c.w + c.x;
+    gl_ClipDistance[1] = c.w - c.x;
+    gl_ClipDistance[2] = c.w + c.y;
+    gl_ClipDistance[3] = c.w - c.y;
+    vec2 scale = 0.5 * (rect.zw - rect.xy);
+    vec2 offset = 0.5 * (rect.zw + rect.xy);
+    gl_Position = vec4(c.xy * scale + offset * c.w, c.z, c.w);
+}
+"""
+MAX_ATLAS = 4096      # pixels on a side of the item-buffer atlas
+PROXIMITY_GAUSS = 6   # Gauss-Legendre points per side of the shooter for close pairs
+
+
+def default_up(normal: np.ndarray) -> np.ndarray:
+    """A unit vector perpendicular to ``normal``: the cross product with the least aligned coordinate axis."""
+    axis = np.zeros(3)
+    axis[int(np.argmin(np.abs(normal)))] = 1.0
+    u = np.cross(normal, axis)
+    return u / np.linalg.norm(u)
+
+
+def hemicube_up(normal: np.ndarray, index: int, rotate: bool, seed: int) -> np.ndarray:
+    """The hemicube's up vector for patch ``index``: seeded per patch, so a row never depends on the batch it was in."""
+    u = default_up(normal)
+    if not rotate:
+        return u
+    angle = np.random.default_rng([int(seed), int(index)]).uniform(0.0, 2 * np.pi)
+    return np.cos(angle) * u + np.sin(angle) * np.cross(normal, u)
+
+
+def default_near_far(quads: np.ndarray) -> tuple[float, float]:
+    """Near = 1e-5 of the scene's diagonal (closer geometry is clipped away: the near-plane error), far = 2 diagonals."""
+    diag = float(np.linalg.norm(np.ptp(quads.reshape(-1, 3), axis=0)))
+    return 1e-5 * diag, 2.0 * diag
+
+
+def hemicube_inputs(quads: np.ndarray, impl: Any, patch: int, rotate: bool = False, seed: int = 0,
+                    near: float | None = None) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """The views and projections of patch ``patch``'s hemicube as ``impl`` computes them (H2, H3)."""
+    q = as_quads(quads)
+    n = patch_normals(q)[patch]
+    c = patch_centers(q)[patch]
+    d_near, far = default_near_far(q)
+    near = d_near if near is None else near
+    views = H.call_views(impl, c, n, hemicube_up(n, patch, rotate, seed))
+    return views, H.call_projections(impl, near, far), near, far
+
+
+def clip_polygon_to_plane(polygon: np.ndarray, point: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """The part of a convex polygon (m, 3) with (x - point)·normal >= 0 (Sutherland-Hodgman, one plane)."""
+    d = (polygon - point) @ normal
+    out = []
+    m = len(polygon)
+    for k in range(m):
+        a, b, da, db = polygon[k], polygon[(k + 1) % m], d[k], d[(k + 1) % m]
+        if da >= 0:
+            out.append(a)
+        if (da >= 0) != (db >= 0):
+            t = da / (da - db)
+            out.append(a + t * (b - a))
+    return np.array(out).reshape(-1, 3)
+
+
+def gauss_points(quad: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Legendre points (k², 3) on a planar quad's bilinear map and their area weights (summing to its area)."""
+    x, w = np.polynomial.legendre.leggauss(k)
+    s, ws = 0.5 * (x + 1), 0.5 * w
+    S, T = np.meshgrid(s, s, indexing="ij")
+    W = np.outer(ws, ws)
+    a, b, c, d = quad
+    S, T, W = S.ravel()[:, None], T.ravel()[:, None], W.ravel()
+    p = (1 - S) * (1 - T) * a + S * (1 - T) * b + S * T * c + (1 - S) * T * d
+    ds = (1 - T) * (b - a) + T * (c - d)
+    dt = (1 - S) * (d - a) + S * (c - b)
+    jac = np.linalg.norm(np.cross(ds, dt), axis=1)
+    return p, W * jac
+
+
+class ItemBufferRenderer:
+    """The scene's triangles on the GPU, and one instanced draw of a batch of hemicubes into an R32UI atlas."""
+
+    def __init__(self, quads: np.ndarray, impl: Any, resolution: int, projections: np.ndarray, batch: int,
+                 ctx: Any = None):
+        from .gl import create_context
+        self.resolution = r = int(resolution)
+        self.ctx = ctx = ctx or create_context()
+        vs, fs = H.call_shaders(impl)
+        for name, src in (("vertex", vs), ("fragment", fs)):
+            if "#version" in src:
+                raise KitError(f"H4 item_buffer_shaders(): the {name} shader must not have a #version line (the kit adds it)")
+        try:
+            self.program = ctx.program(vertex_shader=VERTEX_INTERFACE + "#define main item_main\n" + vs + _VERTEX_ENGINE,
+                                       fragment_shader=FRAGMENT_INTERFACE + fs)
+        except Exception as err:  # moderngl reports compile and link errors as plain Exceptions
+            lines = str(err).strip().splitlines() or ["unknown error"]
+            first = next((ln for ln in lines if "error" in ln.lower()), lines[0])
+            raise KitError(f"H4: shader does not compile: {first.strip()}") from None
+        tris, ids = patch_triangles(quads)
+        self.origin = quads.reshape(-1, 3).mean(axis=0)   # draw relative to the scene's middle: float32 keeps precision
+        positions = (tris - self.origin).astype("f4").reshape(-1, 3)
+        vbo = ctx.buffer(positions.tobytes())
+        ibo = ctx.buffer(np.repeat(ids, 3).astype("u4").tobytes())
+        attrs = [(vbo, "3f", "in_position")] if "in_position" in self.program else []
+        if "in_id" in self.program:
+            attrs.append((ibo, "u", "in_id"))
+        if not attrs:
+            raise KitError("H4: the vertex shader uses neither in_position nor in_id")
+        self.vao = ctx.vertex_array(self.program, attrs)
+        proj = np.asarray(projections, dtype=np.float64)
+        if "u_projections" in self.program:
+            self.program["u_projections"].write(np.ascontiguousarray(proj.transpose(0, 2, 1)).astype("f4").tobytes())
+        # atlas: each hemicube is a tile r wide and 3r high (top r×r, then four sides r/2 high)
+        self.cols = max(1, min(batch, MAX_ATLAS // r))
+        self.rows_of_tiles = max(1, min(-(-batch // self.cols), max(1, MAX_ATLAS // (3 * r))))
+        self.batch = self.cols * self.rows_of_tiles
+        size = (self.cols * r, self.rows_of_tiles * 3 * r)
+        self.atlas = ctx.texture(size, 1, dtype="u4")
+        self.depth = ctx.depth_texture(size)
+        self.fbo = ctx.framebuffer([self.atlas], self.depth)
+        self.faces = ctx.texture((5, 5 * self.batch), 4, dtype="f4")
+        self.faces.filter = (ctx.NEAREST, ctx.NEAREST)
+        self.size = size
+
+    def _rects(self, count: int) -> np.ndarray:
+        """Tile rectangles (count·5, 4) in the atlas's NDC: x0, y0, x1, y1."""
+        r = self.resolution
+        W, Hh = self.size
+        out = np.zeros((count, 5, 4))
+        for b in range(count):
+            col, row = b % self.cols, b // self.cols
+            x0, y0 = col * r, row * 3 * r
+            boxes = [(x0, y0, x0 + r, y0 + r)] + [(x0, y0 + r + k * r // 2, x0 + r, y0 + r + (k + 1) * r // 2) for k in range(4)]
+            for f, (a, b_, c, d) in enumerate(boxes):
+                out[b, f] = (2 * a / W - 1, 2 * b_ / Hh - 1, 2 * c / W - 1, 2 * d / Hh - 1)
+        return out.reshape(-1, 4)
+
+    def render(self, views: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Item buffers of a batch: views (B, 5, 4, 4) world-to-eye -> [(top (r, r), sides (4, r/2, r))] per hemicube."""
+        ctx, r = self.ctx, self.resolution
+        count = len(views)
+        assert count <= self.batch
+        shift = np.eye(4)
+        shift[:3, 3] = self.origin                  # the VBO holds positions minus origin
+        data = np.zeros((count * 5, 5, 4), dtype="f4")
+        mats = (views @ shift).reshape(-1, 4, 4)
+        data[:, :4, :] = mats.transpose(0, 2, 1)    # columns of each matrix
+        data[:, 4, :] = self._rects(count)
+        self.faces.write(np.ascontiguousarray(data).tobytes(), viewport=(0, 0, 5, count * 5))
+        self.faces.use(location=0)
+        if "u_faces" in self.program:
+            self.program["u_faces"].value = 0
+        self.fbo.use()
+        ctx.viewport = (0, 0, *self.size)
+        ctx.enable(ctx.DEPTH_TEST)
+        ctx.disable(ctx.CULL_FACE)
+        for i in range(4):
+            ctx.enable_direct(0x3000 + i)           # GL_CLIP_DISTANCE0..3
+        self.fbo.clear(0, 0, 0, 0, depth=1.0)
+        self.vao.render(instances=count * 5)
+        used_rows = -(-count // self.cols)
+        h = used_rows * 3 * r
+        raw = self.fbo.read(viewport=(0, 0, self.size[0], h), components=1, dtype="u4")
+        atlas = np.frombuffer(raw, dtype=np.uint32).reshape(h, self.size[0])
+        out = []
+        for b in range(count):
+            col, row = b % self.cols, b // self.cols
+            tile = atlas[row * 3 * r:(row + 1) * 3 * r, col * r:(col + 1) * r]
+            out.append((tile[:r], tile[r:].reshape(4, r // 2, r)))
+        for i in range(4):
+            ctx.disable_direct(0x3000 + i)
+        return out
+
+
+class HemicubeFormFactors:
+    """Rows of the form-factor matrix of ``quads`` by hemicubes, lazily, cached, many hemicubes per read-back.
+
+    Parameters: ``impl`` a loaded stage-3 implementation; ``resolution`` cells across the
+    top face (even); ``near`` the near plane (default 1e-5 of the scene's diagonal);
+    ``rotate`` a seeded random rotation of each hemicube about its normal (breaks
+    aliasing between the cells and regular geometry); ``proximity`` "contour" (exact
+    point-to-polygon form factors averaged over the shooter for close pairs, H6) or
+    "none"; ``proximity_distance`` how close is close, in shooter radii (centre to
+    farthest corner) between the shooter's centre and the receiver's bounding sphere;
+    ``batch`` hemicubes per read-back (capped by the atlas size).
+    """
+
+    def __init__(self, quads: Any, impl: Any, resolution: int = 128, near: float | None = None, rotate: bool = True,
+                 seed: int = 0, proximity: str = "contour", batch: int = 256, proximity_distance: float = 2.0,
+                 ctx: Any = None):
+        self.quads = as_quads(quads)
+        if len(self.quads) == 0:
+            raise KitError("no patches")
+        if int(resolution) != resolution or resolution < 2 or resolution % 2:
+            raise KitError(f"hemicube resolution must be an even integer >= 2, got {resolution}")
+        if proximity not in ("contour", "none"):
+            raise KitError(f"proximity must be 'contour' or 'none', got {proximity!r}")
+        self.impl = impl
+        self.n = len(self.quads)
+        self.resolution = int(resolution)
+        self.rotate, self.seed, self.proximity = bool(rotate), int(seed), proximity
+        self.proximity_distance = float(proximity_distance)
+        self.normals = patch_normals(self.quads)
+        self.areas = patch_areas(self.quads)
+        self.centers = patch_centers(self.quads)
+        self.radii = np.linalg.norm(self.quads - self.centers[:, None, :], axis=2).max(axis=1)
+        d_near, self.far = default_near_far(self.quads)
+        self.near = d_near if near is None else float(near)
+        if not 0 < self.near < self.far:
+            raise KitError(f"near plane must lie in (0, {self.far:g}), got {self.near}")
+        self._batch_request = max(1, int(batch))
+        self._ctx = ctx
+        self._renderer: ItemBufferRenderer | None = None
+        self._tables: tuple[np.ndarray, np.ndarray] | None = None
+        self._rows: dict[int, np.ndarray] = {}
+        self.counters = {"hemicubes_rendered": 0, "rows_computed": 0, "rows_cached_hits": 0, "patches_culled": 0,
+                         "patches_backfacing": 0, "proximity_pairs": 0, "readbacks": 0}
+        self.seconds = {"render": 0.0, "sum": 0.0, "proximity": 0.0}
+
+    # -- lazily built GPU state ------------------------------------------------
+    @property
+    def tables(self) -> tuple[np.ndarray, np.ndarray]:
+        if self._tables is None:
+            self._tables = H.call_tables(self.impl, self.resolution)
+        return self._tables
+
+    @property
+    def renderer(self) -> ItemBufferRenderer:
+        if self._renderer is None:
+            projections = H.call_projections(self.impl, self.near, self.far)
+            self._renderer = ItemBufferRenderer(self.quads, self.impl, self.resolution, projections,
+                                                self._batch_request, self._ctx)
+        return self._renderer
+
+    # -- rows --------------------------------------------------------------------
+    def row(self, i: int) -> np.ndarray:
+        """Row F_i· (n,): computed on first request, then cached."""
+        return self.rows([i])[0]
+
+    def rows(self, indices: Iterable[int]) -> np.ndarray:
+        """Rows (k, n) for ``indices``; the missing ones are rendered in batches (many hemicubes per read-back)."""
+        idx = [int(i) for i in indices]
+        for i in idx:
+            if not 0 <= i < self.n:
+                raise KitError(f"patch index {i} out of range 0 .. {self.n - 1}")
+        missing = list(dict.fromkeys(i for i in idx if i not in self._rows))
+        self.counters["rows_cached_hits"] += len(idx) - len(missing)
+        if missing:
+            step = self.renderer.batch
+            for start in range(0, len(missing), step):
+                self._compute(missing[start:start + step])
+        out = np.zeros((len(idx), self.n))
+        for k, i in enumerate(idx):
+            out[k] = self._rows[i]
+        return out
+
+    def matrix(self) -> np.ndarray:
+        """The full matrix F (n, n); F[i, j] is the fraction of the energy leaving i that reaches j."""
+        return self.rows(range(self.n))
+
+    def cached(self) -> list[int]:
+        return sorted(self._rows)
+
+    def views_for(self, i: int) -> np.ndarray:
+        n = self.normals[i]
+        return H.call_views(self.impl, self.centers[i], n, hemicube_up(n, i, self.rotate, self.seed))
+
+    def _compute(self, batch: list[int]) -> None:
+        t0 = time.perf_counter()
+        views = np.stack([self.views_for(i) for i in batch])
+        buffers = self.renderer.render(views)
+        t1 = time.perf_counter()
+        self.counters["readbacks"] += 1
+        self.counters["hemicubes_rendered"] += len(batch)
+        top_w, side_w = self.tables
+        for i, (top, sides) in zip(batch, buffers):
+            row = H.call_row(self.impl, top, sides, top_w, side_w, self.n)
+            self._count_culled(i)
+            self._rows[i] = row
+            self.counters["rows_computed"] += 1
+        t2 = time.perf_counter()
+        if self.proximity == "contour":
+            for i in batch:
+                self._rows[i] = self._proximity_fix(i, self._rows[i])
+        self.seconds["render"] += t1 - t0
+        self.seconds["sum"] += t2 - t1
+        self.seconds["proximity"] += time.perf_counter() - t2
+
+    def _count_culled(self, i: int) -> None:
+        heights = (self.quads - self.centers[i]) @ self.normals[i]                  # (n, 4)
+        behind = heights.max(axis=1) <= 1e-9 * max(self.radii[i], 1e-300)
+        behind[i] = False                                                          # not the shooter itself
+        self.counters["patches_culled"] += int(behind.sum())
+        facing_away = ((self.centers - self.centers[i]) * self.normals).sum(axis=1) >= 0
+        self.counters["patches_backfacing"] += int((facing_away & ~behind).sum())
+
+    def close_patches(self, i: int) -> np.ndarray:
+        """Indices of the patches close to patch i (not i, not wholly behind its plane)."""
+        gap = np.linalg.norm(self.centers - self.centers[i], axis=1) - self.radii
+        heights = (self.quads - self.centers[i]) @ self.normals[i]
+        close = (gap < self.proximity_distance * self.radii[i]) & (heights.max(axis=1) > 1e-9 * self.radii[i])
+        close[i] = False
+        return np.flatnonzero(close)
+
+    def _proximity_fix(self, i: int, row: np.ndarray) -> np.ndarray:
+        close = self.close_patches(i)
+        if not len(close):
+            return row
+        row = row.copy()
+        c, n = self.centers[i], self.normals[i]
+        points, weights = gauss_points(self.quads[i], PROXIMITY_GAUSS)
+        weights = weights / weights.sum()
+        for j in close:
+            poly = clip_polygon_to_plane(self.quads[j], c, n)
+            if len(poly) < 3:
+                continue
+            at_center = H.call_contour(self.impl, c, n, poly)
+            if at_center > 1e-12:
+                visible = min(max(row[j] / at_center, 0.0), 1.0)
+            else:
+                visible = 1.0  # seen edge-on from the centre: the hemicube cannot tell; assume unoccluded
+            if visible == 0.0:
+                continue
+            average = sum(w * H.call_contour(self.impl, p, n, poly) for p, w in zip(points, weights))
+            row[j] = visible * average
+            self.counters["proximity_pairs"] += 1
+        return row
+
+    # -- checks reported for every run ----------------------------------------------
+    def report(self) -> dict[str, Any]:
+        """Row sums, reciprocity (A_i F_ij against A_j F_ji over pairs whose rows are both computed), closure."""
+        done = self.cached()
+        if not done:
+            return {"rows": 0, **self.counters}
+        F = np.stack([self._rows[i] for i in done])
+        sums = F.sum(axis=1)
+        idx = np.array(done)
+        sub = F[:, idx] * self.areas[idx, None]              # A_i F_ij for i, j both computed
+        diff = np.abs(sub - sub.T)
+        scale = np.maximum(sub, sub.T)
+        significant = scale > 1e-6 * max(scale.max(), 1e-300)
+        recip_rel = float((diff[significant] / scale[significant]).max()) if significant.any() else 0.0
+        recip_total = float(diff.sum() / max(2 * sub.sum(), 1e-300))
+        return {"rows": len(done), "row_sum_min": float(sums.min()), "row_sum_max": float(sums.max()),
+                "row_sum_mean": float(sums.mean()), "closure_error_max": float(np.abs(1 - sums).max()),
+                "reciprocity_error_max": recip_rel, "reciprocity_error_total": recip_total,
+                "resolution": self.resolution, **self.counters}
+
+    def summary(self) -> str:
+        r = self.report()
+        if not r["rows"]:
+            return "no rows computed yet"
+        return (f"{r['rows']} rows at resolution {self.resolution}: row sums {r['row_sum_min']:.4f} .. {r['row_sum_max']:.4f}, "
+                f"reciprocity error max {r['reciprocity_error_max']:.2%} (total {r['reciprocity_error_total']:.2%}); "
+                f"{r['hemicubes_rendered']} hemicubes in {r['readbacks']} read-backs, {r['rows_cached_hits']} cache hits, "
+                f"{r['patches_culled']} patches culled, {r['proximity_pairs']} close pairs fixed")
+
+
+# --- pictures -----------------------------------------------------------------
+
+def palette(ids: np.ndarray) -> np.ndarray:
+    """A colour per item id (0: black): hues by the golden ratio, so neighbouring ids differ."""
+    ids = np.asarray(ids, dtype=np.int64)
+    h = (ids * 0.6180339887498949) % 1.0
+    k = (np.array([5.0, 3.0, 1.0]) + h[..., None] * 6) % 6
+    rgb = 0.85 - 0.6 * np.clip(np.minimum(k, 4 - k), 0, 1)
+    rgb = np.where((ids > 0)[..., None], rgb, 0.0)
+    return rgb
+
+
+def unfold(top: np.ndarray, sides: np.ndarray, views: np.ndarray) -> np.ndarray:
+    """A hemicube's five item buffers unfolded into a cross (2r × 2r): top in the middle, each side against its edge.
+
+    Each cross pixel is a direction in the hemicube's frame; it takes the item of the cell
+    that direction passes through (found with the views' axes), so the picture is right
+    whatever the views' conventions, as long as the views are the five faces.
+    """
+    r = top.shape[0]
+    size = 2 * r
+    X, Y = np.meshgrid((np.arange(size) + 0.5) / size * 4 - 2, (np.arange(size) + 0.5) / size * 4 - 2)
+    rot = views[0][:3, :3]            # rows s, u, -f of the top view: right, up, -normal
+    right, up, normal = rot[0], rot[1], -rot[2]
+    z = np.ones_like(X)
+    x, y = X.copy(), Y.copy()
+    for mask, setter in (((Y > 1) & (np.abs(X) <= 1), lambda: (X, np.ones_like(X), 2 - Y)),
+                         ((Y < -1) & (np.abs(X) <= 1), lambda: (X, -np.ones_like(X), 2 + Y)),
+                         ((X > 1) & (np.abs(Y) <= 1), lambda: (np.ones_like(X), Y, 2 - X)),
+                         ((X < -1) & (np.abs(Y) <= 1), lambda: (-np.ones_like(X), Y, 2 + X))):
+        a, b, c = setter()
+        x, y, z = np.where(mask, a, x), np.where(mask, b, y), np.where(mask, c, z)
+    inside = (np.abs(X) <= 1) | (np.abs(Y) <= 1)
+    d = x[..., None] * right + y[..., None] * up + z[..., None] * normal
+    out = np.zeros(X.shape, dtype=np.int64)
+    for f in range(5):
+        R = views[f][:3, :3]
+        fwd, fright, fup = -R[2], R[0], R[1]
+        depth = d @ fwd
+        with np.errstate(divide="ignore", invalid="ignore"):
+            u_, v_ = (d @ fright) / depth, (d @ fup) / depth
+        if f == 0:
+            col, row, rows = np.floor((u_ + 1) / 2 * r), np.floor((v_ + 1) / 2 * r), r
+            img = top
+        else:
+            col, row, rows = np.floor((u_ + 1) / 2 * r), np.floor(v_ * r / 2), r // 2
+            img = sides[f - 1]
+        ok = inside & (depth > 1e-9) & (col >= 0) & (col < r) & (row >= 0) & (row < rows) & (out == 0)
+        ok &= np.abs(u_) <= 1
+        out[ok] = img[row[ok].astype(int), col[ok].astype(int)]
+    return out
+
+
+def item_buffer_image(ff: HemicubeFormFactors, patch: int, size: tuple[int, int] | None = None,
+                      given: dict[str, np.ndarray] | None = None) -> np.ndarray:
+    """The unfolded hemicube of ``patch`` as a float image (image rows top to bottom), ids in palette colours.
+
+    ``given`` may hold trusted ``views`` (5, 4, 4) and ``projections`` (2, 4, 4) replacing H2 and H3.
+    """
+    if given and "projections" in given:
+        renderer = ItemBufferRenderer(ff.quads, ff.impl, ff.resolution, given["projections"], 1, ff._ctx)
+    else:
+        renderer = ff.renderer
+    views = given["views"] if given and "views" in given else ff.views_for(patch)
+    top, sides = renderer.render(np.asarray(views, dtype=np.float64)[None])[0]
+    cross = unfold(top.astype(np.int64), sides.astype(np.int64), np.asarray(views, dtype=np.float64))
+    image = np.flipud(palette(cross))
+    if size is not None and size != (image.shape[1], image.shape[0]):
+        w, h = size
+        rows = (np.arange(h) * image.shape[0] // h)
+        cols = (np.arange(w) * image.shape[1] // w)
+        image = image[rows][:, cols]
+    return image
+
+
+def formfactor_image(scene: Any, quads: np.ndarray, row: np.ndarray, size: tuple[int, int] | None = None) -> np.ndarray:
+    """The scene from its camera, each patch painted with F from the chosen patch to it (scaled to the largest)."""
+    from .gl import create_context
+    width, height = size or (scene.image.width, scene.image.height)
+    cam = scene.camera
+    f = np.asarray(cam.center, float) - np.asarray(cam.eye, float)
+    f /= np.linalg.norm(f)
+    s = np.cross(f, cam.up)
+    s /= np.linalg.norm(s)
+    u = np.cross(s, f)
+    view = np.eye(4)
+    view[0, :3], view[1, :3], view[2, :3] = s, u, -f
+    view[:3, 3] = -view[:3, :3] @ np.asarray(cam.eye, float)
+    t = 1 / np.tan(np.radians(cam.fovy) / 2)
+    a = width / height
+    proj = np.array([[t / a, 0, 0, 0], [0, t, 0, 0],
+                     [0, 0, (cam.far + cam.near) / (cam.near - cam.far), 2 * cam.far * cam.near / (cam.near - cam.far)],
+                     [0, 0, -1, 0]])
+    value = row / max(row.max(), 1e-300)
+    colours = np.stack([value, value ** 2, 0.2 * (1 - value)], axis=1)   # a warm ramp; dark blue is "sees nothing"
+    tris, ids = patch_triangles(quads)
+    ctx = create_context()
+    prog = ctx.program(vertex_shader="""#version 330
+in vec3 in_position; in vec3 in_colour; uniform mat4 u_mvp; out vec3 v_colour;
+void main() { gl_Position = u_mvp * vec4(in_position, 1.0); v_colour = in_colour; }""",
+                       fragment_shader="""#version 330
+in vec3 v_colour; out vec4 colour; void main() { colour = vec4(v_colour, 1.0); }""")
+    data = np.hstack([tris.reshape(-1, 3), np.repeat(colours[ids], 3, axis=0)]).astype("f4")
+    vao = ctx.vertex_array(prog, [(ctx.buffer(data.tobytes()), "3f 3f", "in_position", "in_colour")])
+    prog["u_mvp"].write((proj @ view).T.astype("f4").tobytes())
+    fbo = ctx.framebuffer([ctx.texture((width, height), 4, dtype="f4")], ctx.depth_renderbuffer((width, height)))
+    fbo.use()
+    ctx.enable(ctx.DEPTH_TEST)
+    fbo.clear(0, 0, 0, 1, depth=1.0)
+    vao.render()
+    img = np.frombuffer(fbo.read(components=3, dtype="f4"), dtype=np.float32).reshape(height, width, 3)
+    return np.flipud(img).astype(np.float64)
+
+
+# --- Monte Carlo ray casting, for comparison -----------------------------------------
+
+def formfactor_matrix_raycast(quads: Any, samples: int, seed: int = 0, rows: Iterable[int] | None = None) -> np.ndarray:
+    """Form factors by Monte Carlo ray casting (Embree through embreex): ``samples`` cosine-weighted rays per patch.
+
+    Each ray starts at a uniformly random point of patch i, leaves in a cosine-distributed
+    direction about its normal, and F_ij is the fraction of i's rays whose first hit is the
+    front of patch j (a back face absorbs the ray, as in the hemicube). Unbiased; the
+    standard error of F_ij is sqrt(F_ij (1 - F_ij) / samples). Returns (len(rows), n).
+    """
+    import embreex.mesh_construction as mc
+    import embreex.rtcore_scene as rtcs
+
+    q = as_quads(quads)
+    n = len(q)
+    rows = list(range(n)) if rows is None else [int(i) for i in rows]
+    tris, ids = patch_triangles(q)
+    scene = rtcs.EmbreeScene()
+    mc.TriangleMesh(scene, tris.astype(np.float32))
+    normals, centers = patch_normals(q), patch_centers(q)
+    radii = np.linalg.norm(q - centers[:, None, :], axis=2).max(axis=1)
+    rng = np.random.default_rng(seed)
+    out = np.zeros((len(rows), n))
+    chunk = max(1, 2_000_000 // max(samples, 1))
+    tri_area = 0.5 * np.linalg.norm(np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0]), axis=1)
+    for start in range(0, len(rows), chunk):
+        block = rows[start:start + chunk]
+        m = len(block)
+        b = np.repeat(np.array(block), samples)
+        # a uniform point on patch i: pick one of its two triangles by area, then a uniform point in it
+        a0, a1 = tri_area[2 * b], tri_area[2 * b + 1]
+        second = rng.random(len(b)) * (a0 + a1) >= a0
+        t = 2 * b + second
+        r1, r2 = rng.random(len(b)), rng.random(len(b))
+        s1 = np.sqrt(r1)
+        p = (1 - s1)[:, None] * tris[t, 0] + (s1 * (1 - r2))[:, None] * tris[t, 1] + (s1 * r2)[:, None] * tris[t, 2]
+        nrm = normals[b]
+        tangent = np.cross(nrm, np.where(np.abs(nrm[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]]))
+        tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
+        bitangent = np.cross(nrm, tangent)
+        u1, u2 = rng.random(len(b)), rng.random(len(b))
+        rad, phi = np.sqrt(u1), 2 * np.pi * u2
+        d = (rad * np.cos(phi))[:, None] * tangent + (rad * np.sin(phi))[:, None] * bitangent + np.sqrt(1 - u1)[:, None] * nrm
+        origin = p + nrm * (1e-5 * (1 + np.abs(p).max(axis=1)))[:, None]   # offset off the surface, scaled with |p|
+        hit = scene.run(origin.astype(np.float32), d.astype(np.float32))
+        hit = np.asarray(hit)
+        valid = hit >= 0
+        j = ids[np.where(valid, hit, 0)]
+        front = valid & (np.einsum("ij,ij->i", d, normals[j]) < 0)
+        key = np.repeat(np.arange(m), samples)[front] * n + j[front]
+        out[start:start + m] = np.bincount(key, minlength=m * n).reshape(m, n) / samples
+    return out

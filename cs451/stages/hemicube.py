@@ -1,0 +1,178 @@
+"""Stage 3, hemi-cube form factors: its interface, and the calls into a student's functions with checks.
+
+The form-factor engine (``cs451/formfactors.py``, which stage 4 also uses)
+renders hemicubes with the student's tables (H1), views (H2), projections (H3)
+and shaders (H4), sums rows with H5 and fixes close pairs with H6; it reaches
+them only through the wrappers here, so bad student output becomes a one-line
+error. Heavy imports (moderngl) stay inside functions.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+
+from .. import schema
+from ..errors import KitError
+from ..scene import Scene, parse_scene
+from ..schema import Context, field
+from .base import Stage, Task, as_array, student_call
+
+TASKS = (
+    Task("H1", "delta_form_factors", "Delta form factors", ("resolution",)),
+    Task("H2", "hemicube_views", "The five views", ("center", "normal", "up")),
+    Task("H3", "hemicube_projections", "The face projections", ("near", "far")),
+    Task("H4", "item_buffer_shaders", "Item-buffer shaders", ()),
+    Task("H5", "form_factor_row", "The row of form factors", ("top_items", "side_items", "top_weights", "side_weights", "n_patches")),
+    Task("H6", "point_polygon_form_factor", "The proximity fix", ("point", "normal", "polygon")),
+)
+
+
+@dataclass(frozen=True)
+class HemicubeOptions:
+    patch: int = field("Index of the patch whose hemicube `cs451 render` shows (patches as cs451.patches.scene_polygons lists them).", 0, schema.non_negative)
+    resolution: int = field("Hemicube resolution (cells across the top face; even).", 128, schema.positive)
+    view: Literal["itembuffer", "formfactors"] = field(
+        "'itembuffer': the hemicube of `patch` unfolded, a colour per patch id; "
+        "'formfactors': the scene from the camera, each patch coloured by F from `patch` to it.", "itembuffer")
+    rotate: bool = field("Rotate the hemicube about the normal by a seeded random angle.", False)
+
+
+def options(scene: Scene) -> HemicubeOptions:
+    opts = schema.parse_record(HemicubeOptions, scene.options.get("hemicube", {}),
+                               Context(scene.source or scene.name or "<scene>", "options.hemicube"))
+    if opts.resolution % 2 or opts.resolution < 2:
+        raise Context(scene.source or scene.name or "<scene>", "options.hemicube").child("resolution").error(
+            f"must be an even number >= 2, got {opts.resolution}")
+    return opts
+
+
+# --- calling the student's functions, with checks on what they return --------
+
+def call_tables(impl: Any, resolution: int) -> tuple[np.ndarray, np.ndarray]:
+    out = student_call(STAGE, impl, "H1", int(resolution))
+    if not isinstance(out, (tuple, list)) or len(out) != 2:
+        raise KitError("H1 delta_form_factors() must return (top, side)")
+    r = int(resolution)
+    return (as_array(out[0], (r, r), "H1 delta_form_factors() top"),
+            as_array(out[1], (r // 2, r), "H1 delta_form_factors() side"))
+
+
+def call_views(impl: Any, center: np.ndarray, normal: np.ndarray, up: np.ndarray) -> np.ndarray:
+    out = student_call(STAGE, impl, "H2", np.array(center, float), np.array(normal, float), np.array(up, float))
+    return as_array(out, (5, 4, 4), "H2 hemicube_views()")
+
+
+def call_projections(impl: Any, near: float, far: float) -> np.ndarray:
+    return as_array(student_call(STAGE, impl, "H3", float(near), float(far)), (2, 4, 4), "H3 hemicube_projections()")
+
+
+def call_shaders(impl: Any) -> tuple[str, str]:
+    out = student_call(STAGE, impl, "H4")
+    if not isinstance(out, (tuple, list)) or len(out) != 2 or not all(isinstance(s, str) for s in out):
+        raise KitError("H4 item_buffer_shaders() must return (vertex_source, fragment_source) strings")
+    return out[0], out[1]
+
+
+def call_row(impl: Any, top_items: np.ndarray, side_items: np.ndarray, top_w: np.ndarray, side_w: np.ndarray,
+             n: int) -> np.ndarray:
+    out = student_call(STAGE, impl, "H5", top_items, side_items, top_w, side_w, int(n))
+    return as_array(out, (n,), "H5 form_factor_row()")
+
+
+def call_contour(impl: Any, point: np.ndarray, normal: np.ndarray, polygon: np.ndarray) -> float:
+    out = student_call(STAGE, impl, "H6", np.array(point, float), np.array(normal, float), np.array(polygon, float))
+    try:
+        value = float(np.asarray(out, dtype=np.float64).reshape(()))
+    except (TypeError, ValueError):
+        raise KitError(f"H6 point_polygon_form_factor() must return one number, got {type(out).__name__}") from None
+    if not np.isfinite(value):
+        raise KitError("H6 point_polygon_form_factor() returned NaN or infinity")
+    return value
+
+
+# --- rendering --------------------------------------------------------------
+
+def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, **_: Any) -> np.ndarray:
+    """The hemicube of ``options.hemicube.patch`` unfolded (a colour per patch id), or F from it painted on the scene."""
+    from ..formfactors import HemicubeFormFactors, formfactor_image, item_buffer_image
+    from ..patches import scene_polygons
+    opts = options(scene)
+    quads, _, _ = scene_polygons(scene)
+    if opts.patch >= len(quads):
+        raise Context(scene.source or scene.name or "<scene>", "options.hemicube").child("patch").error(
+            f"the scene has {len(quads)} patches (0 .. {len(quads) - 1}), got {opts.patch}")
+    ff = HemicubeFormFactors(quads, impl, resolution=opts.resolution, rotate=opts.rotate)
+    if opts.view == "itembuffer":
+        return item_buffer_image(ff, opts.patch, size)
+    return formfactor_image(scene, quads, ff.row(opts.patch), size)
+
+
+# --- probes: what the autograder's worker asks a submission for ------------------
+
+def probe_tables(impl: Any, resolution: int) -> dict[str, np.ndarray]:
+    top, side = call_tables(impl, resolution)
+    return {"top": top, "side": side}
+
+
+def probe_views(impl: Any, center: list, normal: list, up: list) -> dict[str, np.ndarray]:
+    return {"views": call_views(impl, np.array(center, float), np.array(normal, float), np.array(up, float))}
+
+
+def probe_projections(impl: Any, near: float, far: float) -> dict[str, np.ndarray]:
+    return {"projections": call_projections(impl, near, far)}
+
+
+def probe_row_from_items(impl: Any, top_items: list, side_items: list, top_weights: list, side_weights: list,
+                         n_patches: int) -> dict[str, np.ndarray]:
+    args = [np.asarray(top_items, dtype=np.uint32), np.asarray(side_items, dtype=np.uint32),
+            np.asarray(top_weights, dtype=np.float64), np.asarray(side_weights, dtype=np.float64)]
+    return {"row": call_row(impl, *args, int(n_patches))}
+
+
+def probe_contour(impl: Any, point: list, normal: list, polygon: list) -> dict[str, np.ndarray]:
+    return {"F": np.array(call_contour(impl, np.array(point, float), np.array(normal, float), np.array(polygon, float)))}
+
+
+def _quads(quads: list) -> np.ndarray:
+    from ..patches import as_quads
+    return as_quads(quads)
+
+
+def probe_rows(impl: Any, quads: list, rows: list[int], resolution: int = 128, rotate: bool = False,
+               proximity: str = "none", seed: int = 0) -> dict[str, np.ndarray]:
+    """Rows of the form-factor matrix of ``quads``, everything from the submission (H1-H5, and H6 if asked)."""
+    from ..formfactors import HemicubeFormFactors
+    ff = HemicubeFormFactors(_quads(quads), impl, resolution=resolution, rotate=rotate, proximity=proximity, seed=seed)
+    return {"rows": ff.rows(list(rows))}
+
+
+def probe_scene_rows(impl: Any, scene: dict, rows: list[int], resolution: int = 64,
+                     proximity: str = "none") -> dict[str, np.ndarray]:
+    from ..patches import scene_polygons
+    quads, _, _ = scene_polygons(parse_scene(scene, "<probe scene>"))
+    return probe_rows(impl, quads.tolist(), rows, resolution=resolution, proximity=proximity)
+
+
+def probe_item_buffer_parts(impl: Any, quads: list, patch: int, resolution: int) -> dict[str, np.ndarray]:
+    """The trusted inputs of an item-buffer image test: the views and projections (from the reference)."""
+    from ..formfactors import hemicube_inputs
+    views, projections, near, far = hemicube_inputs(_quads(quads), impl, patch)
+    return {"views": views, "projections": projections}
+
+
+def probe_item_buffer(impl: Any, quads: list, patch: int, resolution: int, **given: np.ndarray) -> dict[str, np.ndarray]:
+    """The unfolded item buffer of one hemicube as an image, drawn with the submission's shaders (H4)."""
+    from ..formfactors import HemicubeFormFactors, item_buffer_image
+    ff = HemicubeFormFactors(_quads(quads), impl, resolution=resolution, rotate=False, proximity="none")
+    return {"image": item_buffer_image(ff, int(patch), None, given=given or None)}
+
+
+STAGE = Stage(
+    name="hemicube", number=3, title="Hemi-cube form factors", handout="03-hemicube", tasks=TASKS, render=render,
+    probes={"tables": probe_tables, "views": probe_views, "projections": probe_projections,
+            "row_from_items": probe_row_from_items, "contour": probe_contour, "rows": probe_rows,
+            "scene_rows": probe_scene_rows, "item_buffer_parts": probe_item_buffer_parts,
+            "item_buffer": probe_item_buffer},
+)

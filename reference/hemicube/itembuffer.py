@@ -1,0 +1,59 @@
+"""H4 and H5: drawing patch ids instead of colours, and summing the delta form factors of what each hemicube saw."""
+from __future__ import annotations
+
+import numpy as np
+
+
+def item_buffer_shaders():
+    """GLSL (vertex_source, fragment_source) that draw an item buffer: each pixel holds the id of the patch it sees.
+
+    The kit puts ``#version 330`` and this interface in front of your vertex shader::
+
+        in vec3 in_position;          // a corner of a patch, world coordinates
+        in uint in_id;                // the index of its patch, 0 .. n-1
+        mat4 hemicube_view();         // this face's view matrix (your H2)
+        mat4 hemicube_projection();   // this face's projection (your H3)
+
+    and this in front of your fragment shader::
+
+        out uint item;                // write 0 for "no patch", k + 1 for patch k
+
+    A patch seen from behind (its back face) hides what lies behind it but receives nothing:
+    write 0 there. The kit turns on the z-buffer and decides where each face lands.
+    """
+    # BEGIN SOLUTION H4: transform by projection × view, pass the id flat, write id + 1 on front faces (handout §H4)
+    vertex = """
+flat out uint v_id;
+void main() {
+    gl_Position = hemicube_projection() * hemicube_view() * vec4(in_position, 1.0);
+    v_id = in_id;
+}
+"""
+    fragment = """
+flat in uint v_id;
+void main() {
+    item = gl_FrontFacing ? v_id + 1u : 0u;
+}
+"""
+    return vertex, fragment
+    # END SOLUTION
+
+
+def form_factor_row(top_items, side_items, top_weights, side_weights, n_patches):
+    """The row F_i· of one hemicube: the sum of the delta form factors of the cells that see each patch.
+
+    ``top_items`` (r, r) and ``side_items`` (4, r/2, r) are the item buffers (unsigned
+    integers: 0 = nothing, k + 1 = patch k); ``top_weights`` and ``side_weights`` are
+    the tables of H1, shaped like one top face and one side face. Returns a float
+    array of shape (n_patches,). No Python loop over pixels: a 512-resolution
+    hemicube has 786,432 cells.
+    """
+    # BEGIN SOLUTION H5: np.bincount of the ids weighted by the delta form factors, then drop bin 0 (handout §H5)
+    n = int(n_patches)
+    top_items = np.asarray(top_items).astype(np.int64)
+    side_items = np.asarray(side_items).astype(np.int64)
+    row = np.bincount(top_items.ravel(), weights=np.asarray(top_weights, dtype=np.float64).ravel(), minlength=n + 1)
+    sides = np.broadcast_to(np.asarray(side_weights, dtype=np.float64), side_items.shape)
+    row = row + np.bincount(side_items.ravel(), weights=sides.ravel(), minlength=n + 1)
+    return row[1:n + 1]
+    # END SOLUTION

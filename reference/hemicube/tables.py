@@ -1,0 +1,35 @@
+"""H1: the delta form factors of the hemicube's cells (Cohen & Greenberg 1985)."""
+from __future__ import annotations
+
+import numpy as np
+
+
+def delta_form_factors(resolution):
+    """The delta form factor of every cell of a unit hemicube with ``resolution`` cells across the top face.
+
+    The hemicube has half-width 1 and height 1: the top face is the square z = 1,
+    -1 <= x, y <= 1, cut into resolution × resolution cells of area ΔA = (2 / resolution)²;
+    each side face is the rectangle -1 <= y <= 1, 0 <= z <= 1, cut into
+    (resolution / 2) rows × resolution columns of the same cells. Evaluate at cell centres:
+
+        top:  ΔF = ΔA / (π (x² + y² + 1)²)
+        side: ΔF = z ΔA / (π (y² + z² + 1)²)
+
+    Returns ``(top, side)``: ``top`` has shape (resolution, resolution), row j at
+    y = -1 + (j + ½)·2/resolution (rows from bottom to top, as OpenGL reads pixels),
+    column i at x likewise; ``side`` has shape (resolution // 2, resolution), row j at
+    height z = (j + ½)·2/resolution above the base (row 0 touches the base plane),
+    column i at y = -1 + (i + ½)·2/resolution. ``resolution`` is even.
+    """
+    # BEGIN SOLUTION H1: cell centres on the top face and a side face, then the two formulas (handout §H1)
+    r = int(resolution)
+    h = 2.0 / r
+    area = h * h
+    c = -1.0 + (np.arange(r) + 0.5) * h          # cell centres across a face
+    z = (np.arange(r // 2) + 0.5) * h            # heights of the side rows above the base
+    y, x = np.meshgrid(c, c, indexing="ij")      # row index j -> y, column index i -> x
+    top = area / (np.pi * (x * x + y * y + 1.0) ** 2)
+    zz, yy = np.meshgrid(z, c, indexing="ij")
+    side = zz * area / (np.pi * (yy * yy + zz * zz + 1.0) ** 2)
+    return top, side
+    # END SOLUTION

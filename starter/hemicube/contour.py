@@ -1,0 +1,20 @@
+"""H6 (the proximity fix): the exact form factor from a point to a polygon, by Lambert's contour integral."""
+from __future__ import annotations
+
+import numpy as np
+
+
+def point_polygon_form_factor(point, normal, polygon):
+    """F from a differential area at ``point`` with unit ``normal`` to a planar ``polygon`` (m, 3) in front of it.
+
+    Lambert's formula (Stokes' theorem on the unit hemisphere): with
+    r_k = polygon[k] - point and the edge from r_k to r_{k+1} (wrapping around),
+
+        F = 1/(2π) · | Σ_k θ_k  normal · (r_k × r_{k+1}) / |r_k × r_{k+1}| |,
+
+    θ_k being the angle between r_k and r_{k+1}. The kit clips the polygon to the
+    half-space in front of the point before calling. Repeated corners (a triangle
+    stored as a quad) contribute nothing. Returns a float.
+    """
+    # TODO H6: sum θ_k n·γ_k over the edges, skipping zero-length ones, and divide by 2π (handout §H6)
+    raise NotImplementedError("H6: sum θ_k n·γ_k over the edges, skipping zero-length ones, and divide by 2π (handout §H6)")
