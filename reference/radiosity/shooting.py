@@ -1,0 +1,96 @@
+"""R2-R4: progressive refinement radiosity (Cohen, Chen, Wallace & Greenberg 1988).
+
+Every array has one row per patch and, for colours, three columns (red, green, blue):
+areas (n,), reflectance (n, 3) in [0, 1), emission (n, 3), radiosity and unshot radiosity (n, 3).
+A row of form factors is (n,): ``row[j]`` is F_ij, the fraction of the energy leaving patch i
+that reaches patch j.
+"""
+from __future__ import annotations
+
+import heapq
+from typing import Callable
+
+import numpy as np
+
+
+def shoot(i: int, row: np.ndarray, areas: np.ndarray, reflectance: np.ndarray,
+          radiosity: np.ndarray, unshot: np.ndarray) -> tuple:
+    """Shoot patch ``i``'s unshot radiosity to every patch, once.
+
+    For every patch j: ΔRad_j = ρ_j · ΔB_i · F_ij · A_i / A_j (per colour channel), added to
+    both B_j and ΔB_j; then ΔB_i = 0. ``row`` is F_i (n,). Returns ``(radiosity, unshot)``,
+    the updated arrays (updating the arrays passed in, in place, is allowed).
+    """
+    # BEGIN SOLUTION R2: ΔRad_j = ρ_j ΔB_i F_ij A_i / A_j into B and ΔB, then ΔB_i = 0 (handout §R2)
+    delta = unshot[i].copy()
+    received = reflectance * (row * (areas[i] / areas))[:, None] * delta[None, :]
+    radiosity = radiosity + received
+    unshot = unshot + received
+    unshot[i] = 0.0
+    return radiosity, unshot
+    # END SOLUTION
+
+
+def progressive_refinement(row: Callable[[int], np.ndarray], areas: np.ndarray, reflectance: np.ndarray,
+                           emission: np.ndarray, tolerance: float, max_shots: int, overshoot: float,
+                           on_shot: Callable | None) -> tuple:
+    """Solve for the radiosities by shooting, always from the patch with the most unshot energy.
+
+    Start with B = ΔB = E. Repeatedly pick the patch i with the largest unshot energy
+    ``|ΔB_i|·A_i`` (summed over the three channels; ties go to the lower index), using a max-heap
+    built with :mod:`heapq`, fetch its form factors with ``row(i)`` and shoot (R2). Stop when the
+    total unshot energy ``Σ_j |ΔB_j|·A_j`` (all channels) is at most ``tolerance`` times the total
+    emitted energy ``Σ_j E_j·A_j``, or after ``max_shots`` shots.
+
+    ``overshoot`` ω (1 = plain shooting) shoots ω·ΔB_i instead and leaves ΔB_i = (1 − ω)·ΔB_i.
+    If ``on_shot`` is not None, call ``on_shot(shots, i, radiosity, unshot)`` after every shot.
+
+    Returns ``(radiosity, unshot, order)``: B (n, 3), ΔB (n, 3) and the patches shot, in order (list of int).
+    """
+    # BEGIN SOLUTION R3: a heap of (-key, index) with stale entries skipped; shoot until the unshot energy is small (handout §R3)
+    areas = np.asarray(areas, dtype=np.float64)
+    radiosity = np.array(emission, dtype=np.float64)
+    unshot = radiosity.copy()
+    key = np.abs(unshot).sum(axis=1) * areas
+    total_emitted = float((np.asarray(emission).sum(axis=1) * areas).sum())
+    heap = [(-key[j], j) for j in np.flatnonzero(key > 0).tolist()]
+    heapq.heapify(heap)
+    reflects = reflectance.max(axis=1) > 0          # patches of zero albedo never receive anything
+    order: list[int] = []
+    while len(order) < max_shots and key.sum() > tolerance * total_emitted:
+        neg, i = heapq.heappop(heap)
+        if -neg != key[i] or key[i] == 0.0:
+            continue                                # stale entry: the patch's key changed since
+        amount = overshoot * unshot[i]
+        left = unshot[i] - amount
+        unshot[i] = amount
+        f = row(i)
+        radiosity, unshot = shoot(i, f, areas, reflectance, radiosity, unshot)
+        unshot[i] = left
+        order.append(i)
+        changed = reflects & (f != 0)
+        changed[i] = True
+        idx = np.flatnonzero(changed)
+        key[idx] = np.abs(unshot[idx]).sum(axis=1) * areas[idx]
+        for j in idx[key[idx] > 0].tolist():
+            heapq.heappush(heap, (-key[j], j))
+        if len(heap) > 4 * len(key) + 16:           # drop stale entries now and then
+            heap = [(-key[j], j) for j in np.flatnonzero(key > 0).tolist()]
+            heapq.heapify(heap)
+        if on_shot is not None:
+            on_shot(len(order), i, radiosity, unshot)
+    return radiosity, unshot, order
+    # END SOLUTION
+
+
+def ambient_term(areas: np.ndarray, reflectance: np.ndarray, unshot: np.ndarray) -> np.ndarray:
+    """The 1988 paper's ambient term, for previews: (3,), one value per channel.
+
+    ρ_avg = Σ ρ_j A_j / Σ A_j, R = 1 / (1 − ρ_avg), ambient = R · Σ ΔB_j A_j / Σ A_j.
+    The preview shows B_j + ρ_j · ambient.
+    """
+    # BEGIN SOLUTION R4: area-weighted averages of the reflectance and of the unshot radiosity (handout §R4)
+    total = areas.sum()
+    rho_avg = (reflectance * areas[:, None]).sum(axis=0) / total
+    return (unshot * areas[:, None]).sum(axis=0) / total / (1.0 - rho_avg)
+    # END SOLUTION
