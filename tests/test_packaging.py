@@ -107,6 +107,23 @@ def test04_a_whole_repository_upload_is_found_and_an_empty_one_is_explained(grad
     assert f"no '{STAGE}' package" in empty["output"]
 
 
+@pytest.mark.skipif(os.geteuid() != 0, reason="Gradescope runs as root; the worker's drop to 'nobody' needs it")
+def test04b_a_submission_cannot_write_the_results(gradescope):
+    upload = world_readable_dir("cs451-upload-")
+    shutil.copytree(KIT_ROOT / "reference" / STAGE, upload / STAGE)
+    camera = upload / STAGE / "camera.py"
+    forged = gradescope / "results" / "results.json"
+    camera.write_text(camera.read_text().replace(
+        "    f = 1.0 / np.tan(", f"    open({str(forged)!r}, 'w').write('{{\"score\": 1000}}')\n"
+                                 "    f = 1.0 / np.tan(", 1))
+    results = run_autograder(gradescope, upload)
+    shutil.rmtree(upload)
+    s1 = [t for t in results["tests"] if t["tags"] == ["S1"]]
+    assert all(t["score"] == 0 and "Permission denied" in t["output"] for t in s1)
+    assert len(results["tests"]) == 21 and results["score"] == pytest.approx(sum(t["score"] for t in results["tests"]))
+    assert all(t["status"] == "passed" for t in results["tests"] if t["tags"][0] in ("S2", "S3", "S4", "S5", "S7"))
+
+
 @pytest.fixture(scope="module")
 def release(request) -> Path:
     out = world_readable_dir("cs451-release-") / "repo"

@@ -110,7 +110,10 @@ def run_gradescope(stage: str, submission: str | Path, results: str | Path,
     """Grade one Gradescope submission into ``results`` (results.json); always writes it."""
     from ..grading.results import write_failure, write_results
     from ..grading.runner import grade
+    from ..grading import sandbox
     results = Path(results)
+    results.parent.mkdir(parents=True, exist_ok=True)
+    sandbox.protect(results.parent)  # only the grader writes the results (a no-op unless we are root)
     try:
         copy = stage_submission(Path(submission), stage)
         result = grade(stage, copy, include_hidden=True, show_progress=False, jobs=1, total_timeout=budget)
