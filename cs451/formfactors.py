@@ -47,9 +47,9 @@ out uint item;                // 0: no patch; k + 1: patch k
 #: After the student's vertex shader: the instance's matrices, and its placement into the atlas tile.
 _VERTEX_ENGINE = """
 #undef main
-uniform sampler2D u_faces;          // per instance (shooter × face): 4 columns of the view, then the tile rectangle
+uniform sampler2D u_faces;          // per instance (shooter × face): 4 columns of the view, the tile rectangle, the base plane
 uniform mat4 u_projections[2];      // top, side
-out float gl_ClipDistance[4];
+out float gl_ClipDistance[5];
 mat4 hemicube_view() {
     return mat4(texelFetch(u_faces, ivec2(0, gl_InstanceID), 0), texelFetch(u_faces, ivec2(1, gl_InstanceID), 0),
                 texelFetch(u_faces, ivec2(2, gl_InstanceID), 0), texelFetch(u_faces, ivec2(3, gl_InstanceID), 0));
@@ -63,6 +63,8 @@ void main() {
     gl_ClipDistance[1] = c.w - c.x;
     gl_ClipDistance[2] = c.w + c.y;
     gl_ClipDistance[3] = c.w - c.y;
+    vec4 plane = texelFetch(u_faces, ivec2(5, gl_InstanceID), 0);  // the shooter's plane, raised by a hair
+    gl_ClipDistance[4] = dot(plane.xyz, in_position) - plane.w;      // nothing in or behind the base plane is drawn
     vec2 scale = 0.5 * (rect.zw - rect.xy);
     vec2 offset = 0.5 * (rect.zw + rect.xy);
     gl_Position = vec4(c.xy * scale + offset * c.w, c.z, c.w);
@@ -178,7 +180,9 @@ class ItemBufferRenderer:
         self.atlas = ctx.texture(size, 1, dtype="u4")
         self.depth = ctx.depth_texture(size)
         self.fbo = ctx.framebuffer([self.atlas], self.depth)
-        self.faces = ctx.texture((5, 5 * self.batch), 4, dtype="f4")
+        self.faces = ctx.texture((6, 5 * self.batch), 4, dtype="f4")
+        #: geometry closer to a shooter's plane than this is not drawn: float32 cannot place it on either side
+        self.plane_eps = 1e-6 * float(np.linalg.norm(np.ptp(quads.reshape(-1, 3), axis=0)))
         self.faces.filter = (ctx.NEAREST, ctx.NEAREST)
         self.size = size
 
@@ -195,18 +199,31 @@ class ItemBufferRenderer:
                 out[b, f] = (2 * a / W - 1, 2 * b_ / Hh - 1, 2 * c / W - 1, 2 * d / Hh - 1)
         return out.reshape(-1, 4)
 
-    def render(self, views: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-        """Item buffers of a batch: views (B, 5, 4, 4) world-to-eye -> [(top (r, r), sides (4, r/2, r))] per hemicube."""
+    def render(self, views: np.ndarray, planes: np.ndarray | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Item buffers of a batch: views (B, 5, 4, 4) world-to-eye -> [(top (r, r), sides (4, r/2, r))] per hemicube.
+
+        ``planes`` (B, 4): each shooter's base plane (unit normal, n·centre); geometry not above it
+        (by a hair) is clipped away. By default the plane is the top view's eye and view direction.
+        """
         ctx, r = self.ctx, self.resolution
         count = len(views)
         assert count <= self.batch
         shift = np.eye(4)
         shift[:3, 3] = self.origin                  # the VBO holds positions minus origin
-        data = np.zeros((count * 5, 5, 4), dtype="f4")
+        data = np.zeros((count * 5, 6, 4), dtype="f4")
         mats = (views @ shift).reshape(-1, 4, 4)
         data[:, :4, :] = mats.transpose(0, 2, 1)    # columns of each matrix
         data[:, 4, :] = self._rects(count)
-        self.faces.write(np.ascontiguousarray(data).tobytes(), viewport=(0, 0, 5, count * 5))
+        if planes is None:
+            rot, trans = views[:, 0, :3, :3], views[:, 0, :3, 3]
+            normal = -rot[:, 2]                                     # the top face looks along the normal
+            eye = -np.einsum("bji,bj->bi", rot, trans)              # eye = -R^T t
+            planes = np.concatenate([normal, np.einsum("bi,bi->b", normal, eye)[:, None]], axis=1)
+        planes = np.asarray(planes, dtype=np.float64)
+        local = planes[:, 3] - planes[:, :3] @ self.origin + self.plane_eps
+        data[:, 5, :3] = np.repeat(planes[:, :3], 5, axis=0)
+        data[:, 5, 3] = np.repeat(local, 5)
+        self.faces.write(np.ascontiguousarray(data).tobytes(), viewport=(0, 0, 6, count * 5))
         self.faces.use(location=0)
         if "u_faces" in self.program:
             self.program["u_faces"].value = 0
@@ -214,8 +231,8 @@ class ItemBufferRenderer:
         ctx.viewport = (0, 0, *self.size)
         ctx.enable(ctx.DEPTH_TEST)
         ctx.disable(ctx.CULL_FACE)
-        for i in range(4):
-            ctx.enable_direct(0x3000 + i)           # GL_CLIP_DISTANCE0..3
+        for i in range(5):
+            ctx.enable_direct(0x3000 + i)           # GL_CLIP_DISTANCE0..4
         self.fbo.clear(0, 0, 0, 0, depth=1.0)
         self.vao.render(instances=count * 5)
         used_rows = -(-count // self.cols)
@@ -227,7 +244,7 @@ class ItemBufferRenderer:
             col, row = b % self.cols, b // self.cols
             tile = atlas[row * 3 * r:(row + 1) * 3 * r, col * r:(col + 1) * r]
             out.append((tile[:r], tile[r:].reshape(4, r // 2, r)))
-        for i in range(4):
+        for i in range(5):
             ctx.disable_direct(0x3000 + i)
         return out
 

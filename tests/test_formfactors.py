@@ -1,0 +1,171 @@
+"""The form-factor engine (cs451/formfactors.py) and patch helpers (cs451/patches.py) with the reference stage-3 code.
+
+Rows are checked against closed forms (truth.py), closure of a cube, reciprocity, and
+ray casting; the counters show that rows are lazy, cached and batched.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from autograder.hemicube import truth
+from cs451.errors import KitError
+from cs451.formfactors import HemicubeFormFactors, clip_polygon_to_plane, formfactor_matrix_raycast, gauss_points
+from cs451.impl import load_impl, resolve_impl
+from cs451.patches import (patch_areas, patch_centers, patch_normals, patch_triangles, polygon_to_quads, scene_polygons,
+                           subdivide_uniform)
+from cs451.scene import load_scene
+
+
+@pytest.fixture(scope="module")
+def ref():
+    return load_impl(resolve_impl("reference", "hemicube"), "hemicube")
+
+
+# --- patches ------------------------------------------------------------------------
+
+def test_patch_helpers_on_a_quad_and_a_triangle():
+    quad = [[0, 0, 0], [2, 0, 0], [2, 1, 0], [0, 1, 0]]
+    tri = [[0, 0, 1], [0, 3, 1], [3, 0, 1], [3, 0, 1]]       # clockwise from above: faces down
+    q = np.array([quad, tri], float)
+    assert patch_areas(q) == pytest.approx([2.0, 4.5])
+    assert np.allclose(patch_normals(q), [[0, 0, 1], [0, 0, -1]])
+    assert np.allclose(patch_centers(q), [[1, 0.5, 0], [1, 1, 1]])
+    tris, ids = patch_triangles(q)
+    assert tris.shape == (4, 3, 3) and list(ids) == [0, 0, 1, 1]
+
+
+def test_polygons_with_more_corners_are_fanned():
+    hexagon = truth.regular_polygon(1.0, 0.0, 6, facing_down=False)
+    quads = polygon_to_quads(hexagon)
+    assert quads.shape == (4, 4, 3)
+    assert patch_areas(quads).sum() == pytest.approx(1.5 * np.sqrt(3))
+    assert np.allclose(patch_normals(quads), [0, 0, 1])
+
+
+def test_subdivision_keeps_area_and_orientation():
+    q = np.array([[[0, 0, 0], [2, 0, 0], [2.5, 1, 0], [0, 1, 0]], [[0, 0, 1], [0, 3, 1], [3, 0, 1], [3, 0, 1]]], float)
+    sub, parent = subdivide_uniform(q, 3)
+    assert sub.shape == (18, 4, 3) and list(np.bincount(parent)) == [9, 9]
+    assert np.bincount(parent, weights=patch_areas(sub)) == pytest.approx(patch_areas(q))
+    assert np.allclose(patch_normals(sub), patch_normals(q)[parent])
+
+
+def test_cornell_box_patches():
+    quads, names, emission = scene_polygons(load_scene("cornell-box"))
+    assert quads.shape == (16, 4, 3)
+    assert names[-1] == "light" and list(emission[-1]) == [17, 12, 4] and not emission[:-1].any()
+    n = patch_normals(quads)
+    assert np.allclose(n[[0, 1, 15]], [[0, 1, 0], [0, -1, 0], [0, -1, 0]])
+    assert patch_areas(quads)[-1] == pytest.approx(105 * 130)
+
+
+def test_clipping_and_gauss_points():
+    square = np.array([[0, 0, -1], [1, 0, -1], [1, 0, 1], [0, 0, 1]], float)
+    part = clip_polygon_to_plane(square, np.zeros(3), np.array([0, 0, 1.0]))
+    assert patch_areas(polygon_to_quads(part)).sum() == pytest.approx(1.0)
+    p, w = gauss_points(np.array([[0, 0, 0], [2, 0, 0], [3, 1, 0], [0, 1, 0]], float), 4)
+    assert w.sum() == pytest.approx(2.5) and (p[:, :2] @ [1, 0]).max() < 3
+
+
+# --- rows against closed forms ---------------------------------------------------------------
+
+def test_opposed_and_perpendicular_unit_squares_with_the_proximity_fix(ref):
+    ff = HemicubeFormFactors(truth.opposed_squares(1, 1), ref, resolution=32)
+    assert ff.matrix()[0, 1] == pytest.approx(0.19982, abs=2e-5)
+    ff = HemicubeFormFactors(truth.perpendicular_squares(1, 1), ref, resolution=32)
+    F = ff.matrix()
+    assert F[0, 1] == pytest.approx(0.20004, abs=2e-5) and F[1, 0] == pytest.approx(0.20004, abs=2e-5)
+    assert ff.counters["proximity_pairs"] == 2
+
+
+def test_without_the_fix_the_hemicube_converges_to_the_point_form_factor(ref):
+    q = np.array(truth.opposed_squares(1, 1), float)
+    point = truth.contour([0.5, 0.5, 0], [0, 0, 1], q[1])                # 0.2395: the proximity error
+    errors = []
+    for res in (16, 64, 256):
+        ff = HemicubeFormFactors(q, ref, resolution=res, proximity="none", rotate=False)
+        errors.append(abs(ff.row(0)[1] - point) / point)
+    assert errors[-1] < 5e-4 and errors[-1] < errors[0]
+    assert abs(point - truth.howell_c11(1, 1, 1)) > 0.03                 # no resolution reaches the exact value
+
+
+def test_small_patch_under_a_disk(ref):
+    q = truth.small_patch_under_disk(0.01, 1.0, 1.0, 128)
+    ff = HemicubeFormFactors(q, ref, resolution=128, proximity="none", rotate=True)
+    assert ff.row(0)[1:].sum() == pytest.approx(truth.polygon_disk(1.0, 1.0, 128), rel=2e-3)
+
+
+def test_closed_cube_rows_sum_to_one_and_are_reciprocal(ref):
+    q = np.array(truth.cube(2), float)
+    ff = HemicubeFormFactors(q, ref, resolution=64, proximity="none")
+    F = ff.matrix()
+    assert np.abs(F.sum(axis=1) - 1).max() < 3e-3
+    assert np.allclose(np.diag(F), 0)
+    report = ff.report()
+    assert report["rows"] == 24 and report["closure_error_max"] < 3e-3
+    # the hemicube sees from the patch's centre: close pairs are not reciprocal (the proximity error) ...
+    A = patch_areas(q)[:, None]
+    assert np.abs(A * F - (A * F).T).max() > 0.05 * (A * F).max()
+    # ... until the fix replaces them by exact area averages
+    G = HemicubeFormFactors(q, ref, resolution=64, proximity="contour").matrix()
+    assert np.abs(A * G - (A * G).T).max() < 0.01 * (A * G).max()
+    assert np.abs(G.sum(axis=1) - 1).max() < 0.01
+
+
+# --- laziness, caching, batching, culling --------------------------------------------------------
+
+def test_rows_are_lazy_cached_and_batched(ref):
+    q = np.array(truth.cube(2), float)
+    ff = HemicubeFormFactors(q, ref, resolution=16, batch=8, proximity="none")
+    assert ff.counters["hemicubes_rendered"] == 0 and ff._renderer is None     # nothing until asked
+    first = ff.row(3)
+    assert ff.counters["hemicubes_rendered"] == 1 and ff.counters["rows_computed"] == 1
+    again = ff.row(3)
+    assert ff.counters["hemicubes_rendered"] == 1 and ff.counters["rows_cached_hits"] == 1
+    assert np.array_equal(first, again)
+    ff.rows(range(24))                                  # 23 missing rows, 8 a read-back
+    assert ff.counters["hemicubes_rendered"] == 24 and ff.counters["readbacks"] == 1 + 3
+    # a patch's own face (3 others coplanar with it, and itself excluded) and the face opposite... are culled
+    assert ff.counters["patches_culled"] == 24 * 3
+
+
+def test_batching_does_not_change_rows(ref):
+    q = np.array(truth.cube(2), float)
+    a = HemicubeFormFactors(q, ref, resolution=16, batch=1, seed=7).matrix()
+    b = HemicubeFormFactors(q, ref, resolution=16, batch=100, seed=7).matrix()
+    assert np.array_equal(a, b)
+
+
+def test_bad_arguments_are_refused(ref):
+    q = truth.cube(1)
+    with pytest.raises(KitError, match="even"):
+        HemicubeFormFactors(q, ref, resolution=31)
+    with pytest.raises(KitError, match="proximity"):
+        HemicubeFormFactors(q, ref, proximity="magic")
+    with pytest.raises(KitError, match="out of range"):
+        HemicubeFormFactors(q, ref).row(6)
+    with pytest.raises(KitError, match=r"\(n, 4, 3\)"):
+        HemicubeFormFactors(np.zeros((3, 3)), ref)
+
+
+# --- ray casting, the comparison ---------------------------------------------------------------
+
+def test_ray_casting_agrees_with_closed_forms():
+    samples = 40_000
+    F = formfactor_matrix_raycast(truth.opposed_squares(1, 1), samples, seed=1)
+    sigma = np.sqrt(0.2 * 0.8 / samples)
+    assert abs(F[0, 1] - truth.howell_c11(1, 1, 1)) < 4 * sigma
+    F = formfactor_matrix_raycast(truth.cube(1), samples, seed=2)
+    assert F.sum(axis=1) == pytest.approx(1.0, abs=1e-3)     # every ray hits a face of a closed cube
+
+
+def test_hemicube_and_ray_casting_agree_on_the_cornell_box(ref):
+    quads, _, _ = scene_polygons(load_scene("cornell-box"))
+    quads, _ = subdivide_uniform(quads, 3)
+    rows = [9, 11, 24, len(quads) - 5]   # ceiling and back-wall patches, the light: no occluder close to them
+    hemi = HemicubeFormFactors(quads, ref, resolution=128).rows(rows)
+    rays = formfactor_matrix_raycast(quads, 200_000, seed=3, rows=rows)
+    sigma = np.sqrt(np.maximum(rays, 1e-3) / 200_000)
+    assert hemi.sum(axis=1) == pytest.approx(rays.sum(axis=1), abs=0.01)
+    assert np.abs(hemi - rays).max() < 0.01 and np.median(np.abs(hemi - rays) / sigma) < 3
