@@ -1,0 +1,86 @@
+"""Stage 2 hidden tests: cameras, scales and scenes the handout does not show. Not shipped to students."""
+from __future__ import annotations
+
+import numpy as np
+
+from autograder.whitted.public import (CORNELL, WHITTED, bundled, camera_test, counter_test, depth_test, fresnel_test,
+                                       hits_test, image_test, mirror_rays, reflect_test, refract_test, shading_test,
+                                       shadow_test, sphere_test, triangle_test, two_mirrors, watertight_test, bvh_test,
+                                       SHADOW_SCENE)
+
+RNG = np.random.default_rng(4242)
+
+
+def _unit(v):
+    v = np.asarray(v, float)
+    return (v / np.linalg.norm(v, axis=-1, keepdims=True)).tolist()
+
+
+# a 1e-3 sphere 1e4 away: the textbook quadratic cancels here (Ray Tracing Gems ch. 7)
+FAR_CENTER = np.array([1e4, 2e3, -3e3])
+_aim = FAR_CENTER + RNG.uniform(-1.2e-3, 1.2e-3, (40, 3))
+FAR_RAYS = {"origins": [[0, 0, 0]] * 40, "directions": _aim.tolist()}
+
+# grazing and degenerate triangles, tiny and huge coordinates
+_tri_o = RNG.uniform(-1, 1, (30, 3)) + [0, 0, 3]
+_tri_t = RNG.uniform(-0.2, 1.2, (30, 2))
+TRI_RANDOM = {"origins": _tri_o.tolist(),
+              "directions": (np.c_[_tri_t, np.zeros(30)] - _tri_o).tolist(),
+              "v0": [[0, 0, 0]] * 30, "v1": [[1, 0, 0]] * 30, "v2": [[0, 1, 0]] * 30}
+TRI_DEGENERATE = {"origins": [[0.5, 0.1, 1], [0.5, 0.0, 1], [0.2, 0.2, 1]], "directions": [[0, 0, -1]] * 3,
+                  "v0": [[0, 0, 0], [0, 0, 0], [0, 0, 0]], "v1": [[1, 0, 0], [1, 0, 0], [0, 0, 0]],
+                  "v2": [[2, 0, 0], [2, 0, 0], [0, 0, 0]]}
+SCALE = 1e5
+TRI_HUGE = {k: (np.asarray(v) * (SCALE if k != "directions" else 1)).tolist() for k, v in TRI_RANDOM.items()}
+
+# the rippled torus's own triangles as boxes: 55,296 of them
+TORUS = bundled("rippled-torus")
+
+# mixed rays in the Whitted scene: from outside, from inside the glass sphere, grazing the mirror sphere
+_o = np.r_[RNG.uniform(-3, 3, (150, 3)) + [0, 2, 4], np.tile([[-0.55, 0.85, 0.9]], (50, 1))]
+_d = _unit(RNG.normal(size=(200, 3)))
+WHITTED_RAYS = {"origins": _o.tolist(), "directions": _d}
+
+SHADOW_RANDOM = {"origins": (RNG.uniform(-3, 3, (60, 3)) + [0, -1, 0]).tolist(),
+                 "targets": (RNG.uniform(-3, 3, (60, 3)) + [0, 4, 0]).tolist()}
+
+VANISH = bundled("whitted", materials={**WHITTED["materials"],
+                                       "air": {"ambient": [0, 0, 0], "diffuse": [0, 0, 0], "transmittance": [1, 1, 1],
+                                               "ior": 1.0, "fresnel": True}},
+                 objects=WHITTED["objects"][:2] + [{**WHITTED["objects"][2], "material": "air"}])
+
+_g = np.asarray(_unit(RNG.normal(size=(30, 3)) + [0, 0, -1]))
+TESTS = [
+    camera_test("W1 camera_rays: an oblique camera, 9×5, fovy 75°", 3, hidden=True,
+                camera={"eye": [3, -2, 7], "center": [-1, 0.5, 0], "up": [0.2, 1, 0], "fovy": 75}, width=9, height=5),
+    sphere_test("W2 intersect_sphere: a 1e-3 sphere 1e4 away (no cancellation)", 4, hidden=True,
+                center=FAR_CENTER.tolist(), radius=1e-3, **FAR_RAYS),
+    triangle_test("W3 intersect_triangle: 30 random rays, degenerate triangles", 2, hidden=True,
+                  **{k: TRI_RANDOM[k] + TRI_DEGENERATE[k] for k in TRI_RANDOM}),
+    triangle_test("W3 intersect_triangle: coordinates of 1e5", 1, hidden=True, **TRI_HUGE),
+    watertight_test("W3 intersect_triangle: no gaps in a tiny fan (1e-4) seen from afar", 1, hidden=True,
+                    center=[3e-5, -2e-5, 2.0],
+                    fan=[[1e-4 * np.cos(a), 1e-4 * np.sin(a), 0.0] for a in np.linspace(0, 2 * np.pi, 9)[:-1]]),
+    bvh_test("W4 build_bvh: the 55,296 triangles of the rippled torus", 3, hidden=True, scene=TORUS),
+    hits_test("W5 closest_hit: 200 rays in Whitted's scene, 50 from inside the glass", 2, WHITTED, hidden=True,
+              rays=WHITTED_RAYS),
+    hits_test("W5 closest_hit: the rippled torus through your hierarchy, 48×36", 3, TORUS, hidden=True, size=(48, 36)),
+    shading_test("W6 local_shading: lights behind, grazing, shininess 0", 3, hidden=True,
+                 normals=[[0, 0, 1]] * 4, to_eye=[[0, 0, 1]] * 4,
+                 to_light=_unit([[0, 0, -1], [1, 0, 1e-9], [1, 0, 1], [0, 1, 1]]),
+                 light_diffuse=[[1, 0.5, 0.2]] * 4, light_specular=[[0.3, 0.3, 0.3]] * 4,
+                 diffuse=[[0.5, 0.5, 0.5]] * 4, specular=[[1, 1, 1]] * 4, shininess=[10.0, 10.0, 0.0, 64.0]),
+    shadow_test("W7 shadow_transmission: 60 random segments", 4, SHADOW_SCENE, hidden=True, **SHADOW_RANDOM),
+    reflect_test("W8 reflect: random normals", 2, hidden=True, directions=_g.tolist(),
+                 normals=_unit(-_g + RNG.normal(size=(30, 3)) * 0.3)),
+    refract_test("W9 refract: out of glass, total internal reflection, η = 1", 3, hidden=True,
+                 directions=_g.tolist() * 2, normals=[[0, 0, 1]] * 60, eta=[1.5] * 30 + [1.0] * 30),
+    fresnel_test("W10 fresnel: glass to air, past the critical angle", 2, hidden=True,
+                 cos_i=np.linspace(0, 1, 21).tolist(), eta=1.5),
+    image_test("W11 trace: the Cornell box with a mirror and a glass sphere, 64×64", 3, bundled("cornell-spheres"),
+               (64, 64), hidden=True),
+    image_test("W11 trace: a glass sphere of index 1 vanishes, 64×48", 2, VANISH, (64, 48), hidden=True),
+    image_test("W11 trace: the rippled torus, 64×48", 2, TORUS, (64, 48), hidden=True),
+    counter_test("W11 trace: the depth limit between two mirrors (r = 0.8, cut-off 0.01, depth 4)", 1,
+                 two_mirrors(0.8, 0.01, 4), (12, 8), {"camera": 1, "reflection": mirror_rays(0.8, 0.01, 4)}, hidden=True),
+]

@@ -1,0 +1,295 @@
+"""Stage 2 public tests: students run these with ``cs451 grade whitted``.
+
+Points per task (the rubric in assignments/02-whitted/README.md): W1 8, W2 10, W3 10, W4 8, W5 12,
+W6 7, W7 9, W8 4, W9 7, W10 5, W11 20; hidden.py holds the rest of each task's points.
+Images are small (at most 96×72) so that a clear numpy tracer grades in seconds.
+"""
+from __future__ import annotations
+
+import copy
+import json
+
+import numpy as np
+
+from cs451.compare import ImageTolerance
+from cs451.grading.checks import all_of, array_close, image_matches
+from cs451.grading.spec import Test, Verdict
+from cs451.scene import BUNDLED_DIR
+
+from autograder.whitted import truth
+
+IMAGE = ImageTolerance(threshold=0.016, max_bad_fraction=0.01, shift=1)
+#: Time limits per test: generous for clear numpy code (the reference takes under 5 s for each, compiling included).
+QUICK, HITS, RENDER = 20.0, 90.0, 120.0
+
+
+def bundled(name: str, **changes) -> dict:
+    """A bundled scene with top-level fields replaced (a deep copy)."""
+    scene = json.loads((BUNDLED_DIR / f"{name}.json").read_text())
+    scene.update(copy.deepcopy(changes))
+    return scene
+
+
+WHITTED = bundled("whitted")
+CORNELL = bundled("cornell-box")
+
+# --- scenes made for one property each ---------------------------------------------------------
+
+#: Light under the floor, every visible surface facing up: no shadow ray may be cast.
+LIGHT_BEHIND = {
+    "camera": {"eye": [0, 3, 4], "center": [0, 0, 0], "fovy": 40},
+    "image": {"background": [0.2, 0.3, 0.5]},
+    "ambient": [0.3, 0.3, 0.3],
+    "lights": [{"type": "point", "position": [0.5, -4, 0.2]}],
+    "materials": {"floor": {"diffuse": [0.7, 0.7, 0.7], "ambient": [0.5, 0.5, 0.5]},
+                  "tile": {"diffuse": [0.2, 0.5, 0.9], "ambient": [0.2, 0.5, 0.9], "specular": [0.5, 0.5, 0.5], "shininess": 20}},
+    "objects": [{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "material": "floor", "checker": 0.5,
+                 "checker_material": "tile"},
+                {"type": "polygon", "vertices": [[-1, 0.5, 1], [1, 0.5, 1], [1, 0.5, -1], [-1, 0.5, -1]], "material": "tile"}],
+}
+
+
+def two_mirrors(reflectance: float, min_weight: float, max_depth: int) -> dict:
+    """Two infinite parallel mirrors, the camera between them looking down: every ray bounces until cut off."""
+    return {
+        "camera": {"eye": [0, 0.5, 0], "center": [0, -0.5, -1], "fovy": 30},
+        "ambient": [0.1, 0.1, 0.1],
+        "lights": [{"type": "point", "position": [0, 0.5, 3]}],
+        "materials": {"mirror": {"ambient": [0.1, 0.1, 0.1], "diffuse": [0, 0, 0],
+                                 "reflectance": [reflectance, reflectance, reflectance]}},
+        "objects": [{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "material": "mirror"},
+                    {"type": "plane", "point": [0, 1, 0], "normal": [0, -1, 0], "material": "mirror"}],
+        "options": {"whitted": {"min_weight": min_weight, "max_depth": max_depth}},
+    }
+
+
+def mirror_rays(reflectance: float, min_weight: float, max_depth: int) -> int:
+    """Reflection rays per camera ray between two mirrors: β = r^k is cast while β ≥ min_weight and k ≤ max_depth."""
+    k = 0
+    while k < max_depth and reflectance ** (k + 1) >= min_weight:
+        k += 1
+    return k
+
+
+# --- tests ---------------------------------------------------------------------------------------
+
+def camera_test(name, points, hidden=False, **params) -> Test:
+    return Test(name, "W1", points, "camera_rays", params, all_of(truth.camera_checks()),
+                "origins exact to 1e-9; unit directions; through pixel centres within 1e-6 in NDC",
+                expected="none", hidden=hidden, timeout=QUICK)
+
+
+def sphere_test(name, points, hidden=False, **params) -> Test:
+    return Test(name, "W2", points, "intersect_sphere", params, all_of(truth.sphere_checks()),
+                "roots within 1e-9 × max(|t1|, radius) of exact arithmetic; misses are inf", expected="none",
+                hidden=hidden, timeout=QUICK)
+
+
+def triangle_test(name, points, hidden=False, **params) -> Test:
+    return Test(name, "W3", points, "intersect_triangle", params, all_of(truth.triangle_checks()),
+                "t within 1e-9 relative of exact arithmetic; misses inf", expected="none", hidden=hidden, timeout=QUICK)
+
+
+def watertight_test(name, points, center, fan, hidden=False) -> Test:
+    """Rays from ``center``+offset through every vertex and edge midpoint of a fan, each paired with every triangle."""
+    fan = np.asarray(fan, float)
+    hub = fan.mean(axis=0)
+    ring = list(fan) + [(fan[i] + fan[(i + 1) % len(fan)]) / 2 for i in range(len(fan))]
+    targets = [hub] + [hub + 0.999999 * (p - hub) for p in ring] + [(hub + p) / 2 for p in ring]
+    origin = np.asarray(center, float)
+    tris = [(hub, fan[i], fan[(i + 1) % len(fan)]) for i in range(len(fan))]
+    o, d, v0, v1, v2 = [], [], [], [], []
+    for x in targets:
+        for a, b, c in tris:
+            o.append(origin.tolist())
+            d.append((np.asarray(x) - origin).tolist())
+            v0.append(np.asarray(a).tolist())
+            v1.append(np.asarray(b).tolist())
+            v2.append(np.asarray(c).tolist())
+    params = {"origins": o, "directions": d, "v0": v0, "v1": v1, "v2": v2}
+    check = all_of(truth.watertight_checks())
+    return Test(name, "W3", points, "intersect_triangle", params,
+                lambda out, exp, p: check(out, exp, {**p, "rays": len(targets), "triangles": len(tris)}),
+                "every ray through a shared edge or vertex hits at least one triangle", expected="none",
+                hidden=hidden, timeout=QUICK)
+
+
+def bvh_test(name, points, hidden=False, **params) -> Test:
+    return Test(name, "W4", points, "build_bvh", params, all_of(truth.bvh_checks()),
+                "valid format, every primitive in one leaf of ≤ 8, boxes nested, depth ≤ 64, surface-area cost "
+                "≤ 1.5× a median split's", expected="none", hidden=hidden, timeout=HITS)
+
+
+def depth_test(name, points, scene, size, hidden=False) -> Test:
+    return Test(name, "W5", points, "closest_hit", {"scene": scene, "size": list(size)}, all_of(truth.depth_checks()),
+                "hit or miss and depth (5e-3 relative) within the range of pyrender's depth buffer over the pixel's central third, on ≥ 98% of pixels",
+                expected="none", given="primary_rays", hidden=hidden, timeout=HITS)
+
+
+def hits_match(min_same: float = 0.99, rel: float = 1e-6):
+    """The same primitive as the reference's on ≥ min_same of the rays, with t and normal close where it is."""
+    def check(out, expected, params) -> Verdict:
+        prim, want = np.asarray(out["prim"]), np.asarray(expected["prim"])
+        same = prim == want
+        frac = float(same.mean())
+        t, wt = np.asarray(out["t"], float), np.asarray(expected["t"], float)
+        hit = same & (want >= 0)
+        t_bad = int((np.abs(t[hit] - wt[hit]) > rel * np.maximum(np.abs(wt[hit]), 1.0)).sum())
+        n_bad = int((np.abs(np.asarray(out["normals"])[hit] - np.asarray(expected["normals"])[hit]).max(axis=1) > 1e-6).sum()) if hit.any() else 0
+        if frac < min_same:
+            k = int(np.argmax(~same))
+            return Verdict(0.0, f"{1 - frac:.1%} of rays hit another primitive than the reference's "
+                                f"(ray {k}: yours {int(prim[k])}, expected {int(want[k])}; -1 is a miss)")
+        if t_bad or n_bad:
+            return Verdict(0.0, f"{t_bad} rays have t, and {n_bad} rays a normal, unlike the reference's")
+        return Verdict(1.0, f"the same primitive as the reference's on {frac:.2%} of rays, t and normals close")
+    return check
+
+
+def hits_test(name, points, scene, hidden=False, rays=None, size=None, hierarchy=None) -> Test:
+    params = {"scene": scene}
+    if rays is not None:
+        params["rays"] = rays
+    else:
+        params["size"] = list(size)
+    if hierarchy is not None:
+        params["hierarchy"] = hierarchy
+    return Test(name, "W5", points, "closest_hit", params, hits_match(),
+                "same primitive as the reference on ≥ 99% of rays; t within 1e-6 relative; normals within 1e-6",
+                given=None if rays is not None else "primary_rays", hidden=hidden, timeout=HITS)
+
+
+def shading_test(name, points, hidden=False, **params) -> Test:
+    return Test(name, "W6", points, "local_shading", params, array_close("colour", truth.shading_truth, rtol=1e-9, atol=1e-12,
+                                                                        what="the colour"),
+                "within 1e-9 relative of the formula", expected="none", hidden=hidden, timeout=QUICK)
+
+
+def shadow_test(name, points, scene, origins, targets, hidden=False) -> Test:
+    params = {"scene": scene, "origins": origins, "targets": targets}
+
+    def counted(out, p):
+        if int(out["shadow"]) != len(p["origins"]):
+            return f"scene.counters['shadow'] is {int(out['shadow'])} after {len(p['origins'])} shadow rays"
+
+    def values(out, p):
+        want, got = truth.transmission_truth(p), np.asarray(out["transmission"], float)
+        err = np.abs(got - want).max(axis=1)
+        if err.max() > 1e-9:
+            i = int(np.argmax(err))
+            return f"segment {i}: {got[i].round(6).tolist()}, expected {want[i].round(6).tolist()}"
+
+    return Test(name, "W7", points, "shadow_transmission", params,
+                all_of([("transmission through every surface crossed", values), ("shadow rays counted", counted)]),
+                "within 1e-9 of a brute-force walk over the objects", expected="none", hidden=hidden, timeout=HITS)
+
+
+def reflect_test(name, points, hidden=False, **params) -> Test:
+    return Test(name, "W8", points, "reflect", params, array_close("r", truth.reflect_truth, rtol=0, atol=1e-9,
+                                                                   what="the reflected directions"),
+                "within 1e-9", expected="none", hidden=hidden, timeout=QUICK)
+
+
+def refract_test(name, points, hidden=False, **params) -> Test:
+    return Test(name, "W9", points, "refract", params, all_of(truth.refract_checks()),
+                "TIR mask exact; directions within 1e-9 of Snell's law by angles", expected="none", hidden=hidden,
+                timeout=QUICK)
+
+
+def fresnel_test(name, points, hidden=False, **params) -> Test:
+    return Test(name, "W10", points, "fresnel", params, array_close("f", truth.fresnel_truth, rtol=0, atol=1e-9,
+                                                                    what="the reflectance"),
+                "within 1e-9 of Fresnel's equations in sine/tangent form", expected="none", hidden=hidden, timeout=QUICK)
+
+
+def image_test(name, points, scene, size, hidden=False) -> Test:
+    return Test(name, "W11", points, "render", {"scene": scene, "size": list(size)}, image_matches(IMAGE),
+                IMAGE.describe(), given="primary_rays", hidden=hidden, timeout=RENDER)
+
+
+def counter_test(name, points, scene, size, expect: dict, hidden=False) -> Test:
+    """Counters after rendering: each entry of ``expect`` is an exact number or a callable(n) -> bool, n = pixels."""
+    def make(key, want):
+        def sub(out, p):
+            got = int(out[key])
+            n = p["size"][0] * p["size"][1]
+            ok = want(n, got) if callable(want) else got == want * n
+            if not ok:
+                return f"{key} = {got} for {n} pixels" + ("" if callable(want) else f", expected {want * n}")
+        return sub
+    checks = [(f"{key} rays", make(key, want)) for key, want in expect.items()]
+    return Test(name, "W11", points, "render", {"scene": scene, "size": list(size)}, all_of(checks),
+                "exact counts", expected="none", given="primary_rays", hidden=hidden, timeout=RENDER)
+
+
+RNG = np.random.default_rng(12345)
+
+
+def _unit(v):
+    v = np.asarray(v, float)
+    return (v / np.linalg.norm(v, axis=-1, keepdims=True)).tolist()
+
+
+SPHERE_RAYS = {  # hits, a miss, a tangent-ish ray, a ray from inside, a sphere behind the ray
+    "origins": [[0, 0, 5], [0.5, 0.2, 5], [3, 0, 5], [0, 0, 0], [0.2, 0.1, -0.3], [0, 0, -5], [0, 0, 5]],
+    "directions": [[0, 0, -1], [0, 0, -2], [0, 0, -1], [1, 0, 0], [0.3, -0.4, 0.5], [0, 0, -1], [0.8, 0, -0.6]],
+}
+TRI = {"v0": [0, 0, 0], "v1": [1, 0, 0], "v2": [0, 1, 0]}
+TRI_RAYS = {"origins": [[0.2, 0.2, 1], [0.8, 0.8, 1], [0.25, 0.25, -1], [0.1, 0.1, 1], [-0.2, 0.3, 2], [0.3, 0.3, 1]],
+            "directions": [[0, 0, -1], [0, 0, -1], [0, 0, 1], [0, 0, 1], [0.1, 0, -1], [1, 0, 0]]}
+
+SHADE_N = 40
+_n = RNG.normal(size=(SHADE_N, 3))
+_l = RNG.normal(size=(SHADE_N, 3))
+_v = RNG.normal(size=(SHADE_N, 3))
+SHADE = {"normals": _unit(_n), "to_eye": _unit(_v), "to_light": _unit(_l),
+         "light_diffuse": RNG.uniform(0, 1, (SHADE_N, 3)).tolist(), "light_specular": RNG.uniform(0, 1, (SHADE_N, 3)).tolist(),
+         "diffuse": RNG.uniform(0, 1, (SHADE_N, 3)).tolist(), "specular": RNG.uniform(0, 1, (SHADE_N, 3)).tolist(),
+         "shininess": RNG.choice([0.0, 1.0, 8.0, 50.0, 128.0], SHADE_N).tolist()}
+
+SHADOW_SCENE = {
+    "camera": {"eye": [0, 0, 10], "center": [0, 0, 0]},
+    "lights": [{"type": "point", "position": [0, 5, 0]}],
+    "materials": {"glass": {"transmittance": [0.5, 0.6, 0.7]}, "stone": {"diffuse": [0.5, 0.5, 0.5]},
+                  "film": {"transmittance": [0.2, 0.4, 0.8]}},
+    "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "glass"},
+                {"type": "sphere", "center": [3, 0, 0], "radius": 0.5, "material": "stone"},
+                {"type": "polygon", "vertices": [[-2, 2, -2], [2, 2, -2], [2, 2, 2], [-2, 2, 2]], "material": "film"},
+                {"type": "plane", "point": [0, -3, 0], "normal": [0, 1, 0], "material": "stone"}],
+}
+SHADOW_SEGMENTS = {  # through the glass sphere (twice), the film, the stone, nothing, stopping short of the sphere
+    "origins": [[0, -2, 0], [0, 1.5, 0], [3, -2, 0], [-3, -2, 0], [0, -2, 0], [0.5, -2.5, 0.3], [5, 0, 0]],
+    "targets": [[0, 5, 0], [0, 5, 0], [3, 5, 0], [-3, 5, 0], [0, -1.5, 0], [-0.4, 4, -0.2], [-5, 0, 0]],
+}
+
+REFLECT = {"directions": _unit(RNG.normal(size=(20, 3)) - [0, 0, 3]), "normals": [[0, 0, 1]] * 20}
+_dirs = np.asarray(_unit(RNG.normal(size=(24, 3)) + [0, 0, -1.5]))
+REFRACT_IN = {"directions": _dirs.tolist(), "normals": [[0, 0, 1]] * 24, "eta": 1 / 1.5}
+REFRACT_OUT = {"directions": _dirs.tolist(), "normals": [[0, 0, 1]] * 24, "eta": 1.5}
+
+BOX_LO = RNG.uniform(-10, 10, (1000, 3))
+BOX_HI = BOX_LO + RNG.uniform(0.1, 2.0, (1000, 3))   # each box 0.1 to 2 units wide
+
+TESTS = [
+    camera_test("W1 camera_rays: the Whitted scene's camera, 8×6", 5, camera=WHITTED["camera"], width=8, height=6),
+    sphere_test("W2 intersect_sphere: hits, a miss, a ray from inside, a sphere behind", 6, center=[0, 0, 0], radius=1.0,
+                **SPHERE_RAYS),
+    triangle_test("W3 intersect_triangle: hits, misses, behind, parallel", 3, **TRI_RAYS,
+                  **{k: [v] * len(TRI_RAYS["origins"]) for k, v in TRI.items()}),
+    watertight_test("W3 intersect_triangle: no gaps in a fan of six triangles", 3, center=[0.1, 0.2, 3],
+                    fan=[[np.cos(a), np.sin(a), 0.1 * np.sin(3 * a)] for a in np.linspace(0, 2 * np.pi, 7)[:-1]]),
+    bvh_test("W4 build_bvh: 1000 random boxes", 5, lo=BOX_LO.tolist(), hi=BOX_HI.tolist()),
+    depth_test("W5 closest_hit: primary visibility of the Cornell box against pyrender, 64×64", 7, CORNELL, (64, 64)),
+    shading_test("W6 local_shading: 40 random points, lights and materials", 4, **SHADE),
+    shadow_test("W7 shadow_transmission: glass, a film, a stone, nothing", 5, SHADOW_SCENE, **SHADOW_SEGMENTS),
+    reflect_test("W8 reflect: 20 random directions", 2, **REFLECT),
+    refract_test("W9 refract: into glass (η = 1/1.5)", 4, **REFRACT_IN),
+    fresnel_test("W10 fresnel: air to glass over all angles", 3, cos_i=np.linspace(0, 1, 21).tolist(), eta=1 / 1.5),
+    image_test("W11 trace: Whitted's scene, 96×72", 6, WHITTED, (96, 72)),
+    counter_test("W11 trace: no mirror or glass casts no secondary ray (Cornell box, 32×32)", 2, CORNELL, (32, 32),
+                 {"camera": 1, "reflection": 0, "transmission": 0, "shadow": lambda n, got: got > 0}),
+    counter_test("W11 trace: a light behind every surface costs no shadow ray", 2, LIGHT_BEHIND, (32, 24),
+                 {"camera": 1, "shadow": 0}),
+    counter_test("W11 trace: the β cut-off between two mirrors (r = 0.5, cut-off 0.1)", 2, two_mirrors(0.5, 0.1, 10),
+                 (16, 12), {"camera": 1, "reflection": mirror_rays(0.5, 0.1, 10), "transmission": 0}),
+]

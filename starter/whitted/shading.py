@@ -1,0 +1,32 @@
+"""W6, W7: local shading at a point under one light, and how much of a light reaches a point."""
+from __future__ import annotations
+
+import numpy as np
+
+from cs451.raytrace import TraceScene
+
+
+def local_shading(normals, to_eye, to_light, light_diffuse, light_specular, diffuse, specular, shininess) -> np.ndarray:
+    """The light one light reflects toward the eye: diffuse (Lambert) plus specular (Blinn-Phong), (n, 3).
+
+    ``normals``, ``to_eye``, ``to_light``: (n, 3) unit vectors from the surface point;
+    ``light_diffuse``, ``light_specular``: (n, 3) light arriving at the point;
+    ``diffuse``, ``specular``: (n, 3) the material's kd and ks; ``shininess``: (n,).
+    c = kd·Ld·max(n·l, 0) + ks·Ls·max(n·h, 0)^shininess with h = norm(l + v), and the
+    specular term only where n·l > 0.
+    """
+    # TODO W6: Lambert plus Blinn-Phong, as OpenGL 1.x's lighting equation (handout §W6)
+    raise NotImplementedError("W6: Lambert plus Blinn-Phong, as OpenGL 1.x's lighting equation (handout §W6)")
+
+
+def shadow_transmission(scene: TraceScene, origins: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """How much light gets from each target (a light) to each origin (n, 3): an RGB factor (n, 3) in [0, 1].
+
+    Shadow rays run from ``origins`` (already moved off their surface) toward ``targets``.
+    Every surface crossed strictly between them multiplies the factor by its material's
+    ``transmittance``: an opaque one (transmittance 0) blocks the light, a glass one only
+    dims it (a sphere is crossed twice). Any hit ends the search for an opaque blocker:
+    no need for the closest one. Adds the rays to ``scene.counters["shadow"]``.
+    """
+    # TODO W7: any-hit traversal that multiplies transmittances and stops at an opaque blocker (handout §W7)
+    raise NotImplementedError("W7: any-hit traversal that multiplies transmittances and stops at an opaque blocker (handout §W7)")
