@@ -15,6 +15,12 @@ import numpy as np
 from cs451.raytrace import TraceScene
 
 LEAF_SIZE = 4
+# BEGIN SOLUTION
+#: Batches at least this large go to the compiled kernels (kernels.py); smaller ones, to plain numpy
+#: (wavefront.py), where compiling would cost more than it saves.
+COMPILED_RAYS = 50_000
+COMPILED_PRIMS = 5_000
+# END SOLUTION
 
 
 def build_bvh(lo: np.ndarray, hi: np.ndarray) -> dict[str, np.ndarray]:
@@ -23,9 +29,12 @@ def build_bvh(lo: np.ndarray, hi: np.ndarray) -> dict[str, np.ndarray]:
     Split each node where the surface area heuristic is lowest, so that rays visit few nodes.
     """
     # BEGIN SOLUTION W4: top-down: bin centroids along each axis, split where the surface area heuristic is lowest (handout §W4)
-    from .kernels import build
     lo = np.ascontiguousarray(lo, dtype=np.float64)
     hi = np.ascontiguousarray(hi, dtype=np.float64)
+    if len(lo) < COMPILED_PRIMS:   # small: a numpy median split, level by level (no compiling)
+        from .wavefront import median_bvh
+        return median_bvh(lo, hi, LEAF_SIZE)
+    from .kernels import build
     keys = ("lo", "hi", "child", "start", "count", "order")
     return dict(zip(keys, build(lo, hi, LEAF_SIZE)))
     # END SOLUTION
@@ -70,11 +79,17 @@ def closest_hit(scene: TraceScene, origins: np.ndarray, directions: np.ndarray) 
     and ``scene.counters["tests"]``.
     """
     # BEGIN SOLUTION W5: traverse the hierarchy near child first, keep the nearest t (handout §W5)
-    from .kernels import closest, in_threads
-    p = packed(scene)
     o = np.ascontiguousarray(origins, dtype=np.float64)
     d = np.ascontiguousarray(directions, dtype=np.float64)
     n = len(o)
+    if n < COMPILED_RAYS:
+        from .wavefront import closest as closest_numpy
+        t, prim, normals, nodes, tests = closest_numpy(scene, o, d)
+        scene.counters["nodes_visited"] += int(nodes)
+        scene.counters["tests"] += int(tests)
+        return t, prim, normals
+    from .kernels import closest, in_threads
+    p = packed(scene)
     t = np.empty(n)
     prim = np.empty(n, np.int64)
     normals = np.empty((n, 3))
