@@ -233,10 +233,10 @@ class ItemBufferRenderer:
         ctx.disable(ctx.CULL_FACE)
         for i in range(5):
             ctx.enable_direct(0x3000 + i)           # GL_CLIP_DISTANCE0..4
-        self.fbo.clear(0, 0, 0, 0, depth=1.0)
-        self.vao.render(instances=count * 5)
         used_rows = -(-count // self.cols)
         h = used_rows * 3 * r
+        self.fbo.clear(0, 0, 0, 0, depth=1.0, viewport=(0, 0, self.size[0], h))
+        self.vao.render(instances=count * 5)
         raw = self.fbo.read(viewport=(0, 0, self.size[0], h), components=1, dtype="u4")
         atlas = np.frombuffer(raw, dtype=np.uint32).reshape(h, self.size[0])
         out = []
@@ -285,7 +285,7 @@ class HemicubeFormFactors:
         self.near = d_near if near is None else float(near)
         if not 0 < self.near < self.far:
             raise KitError(f"near plane must lie in (0, {self.far:g}), got {self.near}")
-        self._batch_request = max(1, int(batch))
+        self._batch_request = max(1, min(int(batch), self.n))   # no bigger an atlas than the scene needs
         self._ctx = ctx
         self._renderer: ItemBufferRenderer | None = None
         self._tables: tuple[np.ndarray, np.ndarray] | None = None
@@ -415,7 +415,8 @@ class HemicubeFormFactors:
         sub = F[:, idx] * self.areas[idx, None]              # A_i F_ij for i, j both computed
         diff = np.abs(sub - sub.T)
         scale = np.maximum(sub, sub.T)
-        significant = scale > 1e-6 * max(scale.max(), 1e-300)
+        # the max is over pairs that both see each other clearly; the total weighs every pair
+        significant = np.minimum(sub, sub.T) > 1e-3 * max(scale.max(), 1e-300)
         recip_rel = float((diff[significant] / scale[significant]).max()) if significant.any() else 0.0
         recip_total = float(diff.sum() / max(2 * sub.sum(), 1e-300))
         return {"rows": len(done), "row_sum_min": float(sums.min()), "row_sum_max": float(sums.max()),
@@ -549,14 +550,20 @@ in vec3 v_colour; out vec4 colour; void main() { colour = vec4(v_colour, 1.0); }
 
 # --- Monte Carlo ray casting, for comparison -----------------------------------------
 
-def formfactor_matrix_raycast(quads: Any, samples: int, seed: int = 0, rows: Iterable[int] | None = None) -> np.ndarray:
+def formfactor_matrix_raycast(quads: Any, samples: int, seed: int = 0, rows: Iterable[int] | None = None,
+                              origin: str = "area") -> np.ndarray:
     """Form factors by Monte Carlo ray casting (Embree through embreex): ``samples`` cosine-weighted rays per patch.
 
-    Each ray starts at a uniformly random point of patch i, leaves in a cosine-distributed
-    direction about its normal, and F_ij is the fraction of i's rays whose first hit is the
-    front of patch j (a back face absorbs the ray, as in the hemicube). Unbiased; the
-    standard error of F_ij is sqrt(F_ij (1 - F_ij) / samples). Returns (len(rows), n).
+    Each ray leaves patch i in a cosine-distributed direction about its normal, from a
+    uniformly random point of the patch (``origin="area"``: estimates the true F_ij, the
+    area average) or from its centre (``origin="center"``: estimates what a hemicube
+    computes, the form factor of the centre's differential area). F_ij is the fraction of
+    i's rays whose first hit is the front of patch j (a back face absorbs the ray, as in
+    the hemicube). Unbiased; the standard error of F_ij is sqrt(F_ij (1 - F_ij) / samples).
+    Returns (len(rows), n).
     """
+    if origin not in ("area", "center"):
+        raise KitError(f"origin must be 'area' or 'center', got {origin!r}")
     import embreex.mesh_construction as mc
     import embreex.rtcore_scene as rtcs
 
@@ -583,6 +590,8 @@ def formfactor_matrix_raycast(quads: Any, samples: int, seed: int = 0, rows: Ite
         r1, r2 = rng.random(len(b)), rng.random(len(b))
         s1 = np.sqrt(r1)
         p = (1 - s1)[:, None] * tris[t, 0] + (s1 * (1 - r2))[:, None] * tris[t, 1] + (s1 * r2)[:, None] * tris[t, 2]
+        if origin == "center":
+            p = centers[b]
         nrm = normals[b]
         tangent = np.cross(nrm, np.where(np.abs(nrm[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]]))
         tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
@@ -590,8 +599,8 @@ def formfactor_matrix_raycast(quads: Any, samples: int, seed: int = 0, rows: Ite
         u1, u2 = rng.random(len(b)), rng.random(len(b))
         rad, phi = np.sqrt(u1), 2 * np.pi * u2
         d = (rad * np.cos(phi))[:, None] * tangent + (rad * np.sin(phi))[:, None] * bitangent + np.sqrt(1 - u1)[:, None] * nrm
-        origin = p + nrm * (1e-5 * (1 + np.abs(p).max(axis=1)))[:, None]   # offset off the surface, scaled with |p|
-        hit = scene.run(origin.astype(np.float32), d.astype(np.float32))
+        start_at = p + nrm * (1e-5 * (1 + np.abs(p).max(axis=1)))[:, None]   # offset off the surface, scaled with |p|
+        hit = scene.run(start_at.astype(np.float32), d.astype(np.float32))
         hit = np.asarray(hit)
         valid = hit >= 0
         j = ids[np.where(valid, hit, 0)]

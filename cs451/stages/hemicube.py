@@ -8,6 +8,7 @@ error. Heavy imports (moderngl) stay inside functions.
 """
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -106,7 +107,9 @@ def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, **_: An
     ff = HemicubeFormFactors(quads, impl, resolution=opts.resolution, rotate=opts.rotate)
     if opts.view == "itembuffer":
         return item_buffer_image(ff, opts.patch, size)
-    return formfactor_image(scene, quads, ff.row(opts.patch), size)
+    image = formfactor_image(scene, quads, ff.row(opts.patch), size)
+    print(f"patch {opts.patch}: {ff.summary()}", file=sys.stderr)   # row sums, reciprocity, closure: every run
+    return image
 
 
 # --- probes: what the autograder's worker asks a submission for ------------------
