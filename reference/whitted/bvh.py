@@ -18,7 +18,7 @@ LEAF_SIZE = 4
 # BEGIN SOLUTION
 #: Batches at least this large go to the compiled kernels (kernels.py); smaller ones, to plain numpy
 #: (wavefront.py), where compiling would cost more than it saves.
-COMPILED_RAYS = 50_000
+COMPILED_RAYS = 10_000
 COMPILED_PRIMS = 5_000
 # END SOLUTION
 

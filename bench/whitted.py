@@ -1,0 +1,226 @@
+"""Stage 2 benchmark: run time against error, and closest-hit rays per second against Embree.
+
+Part 1, for each bundled Whitted scene: frame time and error over image size, samples per
+pixel and the β cut-off, against a converged render of the same scene (16 samples per pixel,
+cut-off 1e-4, 12 bounces, 64 shadow rays per area light). Error is the RMS difference in
+linear colour after box-filtering the converged image to the size rendered.
+
+Part 2: closest-hit queries on the 55,296-triangle rippled torus (the mesh alone), the
+reference's compiled kernels against Embree 4 through embreex, in the same run, on the same
+rays (primary rays and random rays from inside the torus's bounding box). Embree's ``run``
+is one thread; two threads each take half the rays. Skipped with a note when embreex is absent.
+"""
+from __future__ import annotations
+
+import importlib
+import json
+import math
+import os
+import platform
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+from cs451.impl import load_impl, resolve_impl
+from cs451.scene import load_scene, parse_scene
+from cs451.stages import whitted as stage
+
+SCENES = ("whitted", "cornell-spheres", "rippled-torus")
+CONVERGED = {"spp": 16, "min_weight": 1e-4, "max_depth": 12, "light_samples": 64}
+DEFAULT = {"spp": 1, "min_weight": 0.01}
+
+
+def _render(impl, scene, size, **opts):
+    start = time.perf_counter()
+    image, counters = stage.render_traced(scene, impl, size, **opts)
+    return image, counters, time.perf_counter() - start
+
+
+def _downsample(image: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    h, w = image.shape[:2]
+    fy, fx = h // size[1], w // size[0]
+    return image.reshape(size[1], fy, size[0], fx, 3).mean(axis=(1, 3))
+
+
+def time_against_error(impl, quick: bool) -> list[dict]:
+    rows = []
+    top = (160, 120) if quick else (320, 240)
+    sizes = [(top[0] // 4, top[1] // 4), (top[0] // 2, top[1] // 2), top]
+    for name in SCENES:
+        scene = load_scene(name)
+        area = any(getattr(l, "type_name", "") == "area" for l in scene.lights)
+        _render(impl, scene, (16, 12))  # compile and warm up
+        converged, _, conv_s = _render(impl, scene, top, **CONVERGED)
+        variants = [("size", f"{w}×{h}", (w, h), DEFAULT) for w, h in sizes]
+        variants += [("spp", str(s), top, {**DEFAULT, "spp": s}) for s in ((1, 4) if quick else (1, 4, 9))]
+        variants += [("cut-off", f"{c:g}", top, {**DEFAULT, "min_weight": c}) for c in (0.5, 0.1, 0.01, 0.001)]
+        if area:
+            variants += [("shadow rays", str(k), top, {**DEFAULT, "light_samples": k}) for k in (1, 4, 16)]
+        for sweep, value, size, opts in variants:
+            image, counters, seconds = _render(impl, scene, size, **opts)
+            err = np.sqrt(np.mean((image - _downsample(converged, size)) ** 2))
+            rays = sum(counters[k] for k in ("camera", "shadow", "reflection", "transmission"))
+            rows.append({"scene": name, "sweep": sweep, "value": value, "width": size[0], "height": size[1],
+                         "seconds": seconds, "rms_error": float(err), "rays": rays, **counters,
+                         "converged_seconds": conv_s})
+    return rows
+
+
+def _torus_only():
+    data = json.loads((Path(stage.__file__).parent.parent / "scenes" / "rippled-torus.json").read_text())
+    data["objects"] = [o for o in data["objects"] if o["type"] == "mesh"]
+    return parse_scene(data, "rippled-torus (mesh only)")
+
+
+def _query_rays(scene, n_side: int, seed: int = 7) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    from cs451 import raytrace
+    ts = raytrace.build(scene)
+    lo, hi = ts.bounds()
+    box_lo, box_hi = lo.min(axis=0), hi.max(axis=0)
+    cam = scene.camera
+    primary = stage._camera_rays(load_impl(resolve_impl("reference", "whitted"), "whitted"), cam, n_side * 4 // 3, n_side)
+    rng = np.random.default_rng(seed)
+    n = len(primary[0])
+    o = rng.uniform(box_lo, box_hi, (n, 3))
+    d = rng.normal(size=(n, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    return {"primary": primary, "random": (o, d)}
+
+
+def _best_of(fn, repeats: int) -> float:
+    best = math.inf
+    for _ in range(repeats):
+        start = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
+def rays_per_second(impl, quick: bool) -> dict:
+    scene = _torus_only()
+    kernels = importlib.import_module(impl.__name__ + ".kernels")
+    bvh_mod = importlib.import_module(impl.__name__ + ".bvh")
+    start = time.perf_counter()
+    ts = stage.prepare(scene, impl, hierarchy=True)
+    build_s = time.perf_counter() - start
+    rays = _query_rays(scene, 480 if quick else 960)
+    repeats = 2 if quick else 5
+    p = bvh_mod.packed(ts)
+    shared = (*p["tree"], p["nsph"], p["sph"], p["tri"], p["planes"], p["tri_normal"])
+    out: dict = {"triangles": int(ts.n_triangles), "bvh_nodes": int(len(ts.bvh["child"])), "bvh_build_s": build_s,
+                 "cpus": os.cpu_count(), "machine": platform.processor() or platform.machine(), "kinds": {}}
+    try:
+        from embreex import rtcore_scene as rtcs
+        from embreex.mesh_construction import TriangleMesh
+        tri = np.stack([ts.tri_v0, ts.tri_v1, ts.tri_v2], axis=1).astype(np.float32)
+        start = time.perf_counter()
+        escene = rtcs.EmbreeScene()
+        TriangleMesh(escene, tri)
+        escene.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32))  # commit (builds the BVH)
+        out["embree_build_s"] = time.perf_counter() - start
+    except ImportError:
+        escene = None
+        out["embree"] = "embreex is not installed (pip install -e '.[peers]'): Embree columns skipped"
+    for kind, (o, d) in rays.items():
+        o = np.ascontiguousarray(o)
+        d = np.ascontiguousarray(d)
+        n = len(o)
+        t = np.empty(n)
+        prim = np.empty(n, np.int64)
+        nrm = np.empty((n, 3))
+        stats = np.empty((n, 2), np.int64)
+        row: dict = {"rays": n}
+        for threads in (1, 2):
+            seconds = _best_of(lambda: kernels.in_threads(kernels.closest, n, (o, d), shared, (t, prim, nrm, stats),
+                                                          threads=threads), repeats)
+            row[f"reference_{threads}t_Mrays"] = n / seconds / 1e6
+        ts.reset_counters()
+        row["reference_W5_Mrays"] = n / _best_of(lambda: impl.closest_hit(ts, o, d), repeats) / 1e6
+        row["nodes_per_ray"] = float(stats[:, 0].mean())
+        row["tests_per_ray"] = float(stats[:, 1].mean())
+        if escene is not None:
+            o32, d32 = o.astype(np.float32), d.astype(np.float32)
+            res = escene.run(o32, d32, output=1)
+            ehit = res["geomID"] >= 0
+            row["agree_prim"] = float(np.mean(np.where(ehit, res["primID"], -1) == np.where(prim >= 0, prim, -1)))
+            both = ehit & (prim >= 0)
+            row["agree_t_rel"] = float(np.median(np.abs(res["tfar"][both] - t[both]) / t[both])) if both.any() else 0.0
+            for label, output in (("full", 1), ("prim", None)):
+                row[f"embree_1t_{label}_Mrays"] = n / _best_of(lambda: escene.run(o32, d32, output=output), repeats) / 1e6
+            half = n // 2
+            with ThreadPoolExecutor(2) as pool:
+                def two():
+                    list(pool.map(lambda s: escene.run(o32[s], d32[s], output=1), (slice(0, half), slice(half, n))))
+                row["embree_2t_full_Mrays"] = n / _best_of(two, repeats) / 1e6
+            row["ratio_2t"] = row["reference_2t_Mrays"] / row["embree_2t_full_Mrays"]
+            row["ratio_1t"] = row["reference_1t_Mrays"] / row["embree_1t_full_Mrays"]
+        out["kinds"][kind] = row
+    return out
+
+
+def _plot(rows: list[dict], speed: dict, path: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    ax = axes[0]
+    markers = {"size": "o", "spp": "s", "cut-off": "^", "shadow rays": "D"}
+    colours = dict(zip(SCENES, ("tab:blue", "tab:orange", "tab:green")))
+    for r in rows:
+        ax.scatter(r["seconds"], r["rms_error"], marker=markers[r["sweep"]], color=colours[r["scene"]], s=30)
+        ax.annotate(r["value"], (r["seconds"], r["rms_error"]), fontsize=6, xytext=(3, 2), textcoords="offset points")
+    for scene, c in colours.items():
+        ax.scatter([], [], color=c, label=scene)
+    for sweep, m in markers.items():
+        ax.scatter([], [], marker=m, color="gray", label=sweep)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("frame time (s)")
+    ax.set_ylabel("RMS error against converged (linear)")
+    ax.set_title("Whitted reference: time against error")
+    ax.legend(fontsize=7)
+    ax = axes[1]
+    kinds = list(speed["kinds"])
+    labels = [k for k in ("reference_1t_Mrays", "reference_2t_Mrays", "embree_1t_full_Mrays", "embree_2t_full_Mrays")
+              if k in speed["kinds"][kinds[0]]]
+    x = np.arange(len(kinds))
+    for i, label in enumerate(labels):
+        ax.bar(x + i * 0.2, [speed["kinds"][k][label] for k in kinds], 0.2, label=label.replace("_Mrays", ""))
+    ax.set_xticks(x + 0.3, kinds)
+    ax.set_ylabel("million closest-hit rays per second")
+    ax.set_title(f"{speed['triangles']:,} triangles")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(output: Path, quick: bool = False) -> dict:
+    impl = load_impl(resolve_impl("reference", "whitted"), "whitted")
+    speed = rays_per_second(impl, quick)
+    rows = time_against_error(impl, quick)
+    print("stage 2 whitted: time against error (RMS, linear) against a converged render "
+          f"(spp {CONVERGED['spp']}, cut-off {CONVERGED['min_weight']:g}, depth {CONVERGED['max_depth']}, "
+          f"{CONVERGED['light_samples']} shadow rays per area light)")
+    print(f"{'scene':<16} {'sweep':<12} {'value':>8} {'size':>8} {'seconds':>8} {'rays':>9} {'Mrays/s':>8} {'RMS error':>10}")
+    for r in rows:
+        print(f"{r['scene']:<16} {r['sweep']:<12} {r['value']:>8} {r['width']}×{r['height']:<4} {r['seconds']:>8.3f} "
+              f"{r['rays']:>9} {r['rays'] / r['seconds'] / 1e6:>8.2f} {r['rms_error']:>10.5f}")
+    print(f"\nclosest-hit queries, {speed['triangles']:,} triangles (rippled torus alone), {speed['cpus']} CPUs; "
+          f"BVH build: reference {speed['bvh_build_s']:.2f} s ({speed['bvh_nodes']} nodes)"
+          + (f", Embree {speed['embree_build_s']:.2f} s" if "embree_build_s" in speed else ""))
+    if "embree" in speed:
+        print(speed["embree"])
+    cols = ["reference_1t_Mrays", "reference_2t_Mrays", "reference_W5_Mrays", "embree_1t_full_Mrays",
+            "embree_1t_prim_Mrays", "embree_2t_full_Mrays", "ratio_1t", "ratio_2t", "agree_prim"]
+    print(f"{'rays':<8} {'n':>8} " + " ".join(f"{c.replace('_Mrays', ''):>14}" for c in cols))
+    for kind, r in speed["kinds"].items():
+        print(f"{kind:<8} {r['rays']:>8} " + " ".join(f"{r[c]:>14.3f}" if c in r else f"{'-':>14}" for c in cols))
+    output.mkdir(parents=True, exist_ok=True)
+    result = {"time_against_error": rows, "closest_hit": speed, "converged": CONVERGED}
+    (output / "whitted.json").write_text(json.dumps(result, indent=2))
+    _plot(rows, speed, output / "whitted.png")
+    print(f"wrote {output / 'whitted.json'} and {output / 'whitted.png'}")
+    return result
