@@ -30,40 +30,40 @@ def area_average(shooter: np.ndarray, receiver: np.ndarray, k: int = 24) -> floa
     return total / area
 
 
-def test_issue_numbers():
+def test01_issue_numbers():
     assert round(truth.howell_c11(1, 1, 1), 5) == 0.19982
     assert round(truth.howell_c14(1, 1, 1), 5) == 0.20004
 
 
 @pytest.mark.parametrize("a,b,c", [(1, 1, 1), (2, 0.5, 1), (0.3, 0.3, 2), (1, 3, 0.5)])
-def test_c11_is_the_area_average_of_the_contour_integral(a, b, c):
+def test02_c11_is_the_area_average_of_the_contour_integral(a, b, c):
     shooter = np.array([[0, 0, 0], [a, 0, 0], [a, b, 0], [0, b, 0]], float)
     receiver = np.array([[0, 0, c], [0, b, c], [a, b, c], [a, 0, c]], float)
     assert area_average(shooter, receiver) == pytest.approx(truth.howell_c11(a, b, c), rel=1e-4)
 
 
 @pytest.mark.parametrize("l,w,h", [(1, 1, 1), (1, 0.5, 2), (2, 1, 0.3)])
-def test_c14_is_the_area_average_of_the_contour_integral(l, w, h):
+def test03_c14_is_the_area_average_of_the_contour_integral(l, w, h):
     floor = np.array([[0, 0, 0], [w, 0, 0], [w, l, 0], [0, l, 0]], float)     # w along x, the common edge along y
     wall = np.array([[0, 0, 0], [0, l, 0], [0, l, h], [0, 0, h]], float)
     # the integrand is singular along the common edge: a fine rule, and a looser tolerance
     assert area_average(floor, wall, k=48) == pytest.approx(truth.howell_c14(l, w, h), rel=2e-3)
 
 
-def test_c14_reciprocity():
+def test04_c14_reciprocity():
     l, w, h = 1.0, 0.5, 2.0
     assert l * w * truth.howell_c14(l, w, h) == pytest.approx(l * h * truth.howell_c14(l, h, w), rel=1e-12)
 
 
 @pytest.mark.parametrize("radius,height", [(1, 1), (3, 0.7), (0.2, 5)])
-def test_disk_is_the_limit_of_inscribed_polygons(radius, height):
+def test05_disk_is_the_limit_of_inscribed_polygons(radius, height):
     exact = truth.disk(radius, height)
     coarse, fine = truth.polygon_disk(radius, height, 64), truth.polygon_disk(radius, height, 4096)
     assert coarse < fine < exact
     assert fine == pytest.approx(exact, rel=1e-5)
 
 
-def test_contour_is_orientation_free_and_ignores_repeated_corners():
+def test06_contour_is_orientation_free_and_ignores_repeated_corners():
     tri = [[0.2, -0.3, 1.5], [-0.4, 0.5, 0.8], [0.6, 0.9, 2.0]]
     f = truth.contour([0, 0, 0], [0, 0, 1], tri)
     assert f == pytest.approx(truth.contour([0, 0, 0], [0, 0, 1], tri[::-1]))
@@ -71,13 +71,13 @@ def test_contour_is_orientation_free_and_ignores_repeated_corners():
 
 
 @pytest.mark.parametrize("r", [2, 8, 32])
-def test_exact_cells_cover_the_hemisphere(r):
+def test07_exact_cells_cover_the_hemisphere(r):
     top = sum(truth.exact_cell_top(r, i, j) for i in range(r) for j in range(r))
     side = sum(truth.exact_cell_side(r, i, j) for i in range(r) for j in range(r // 2))
     assert top + 4 * side == pytest.approx(1.0, abs=1e-12)
 
 
-def test_delta_form_factors_approach_the_exact_cells():
+def test08_delta_form_factors_approach_the_exact_cells():
     errors = []
     for r in (8, 16, 32):
         exact_top = np.array([[truth.exact_cell_top(r, i, j) for i in range(r)] for j in range(r)])

@@ -24,7 +24,7 @@ def ref():
 
 # --- patches ------------------------------------------------------------------------
 
-def test_patch_helpers_on_a_quad_and_a_triangle():
+def test01_patch_helpers_on_a_quad_and_a_triangle():
     quad = [[0, 0, 0], [2, 0, 0], [2, 1, 0], [0, 1, 0]]
     tri = [[0, 0, 1], [0, 3, 1], [3, 0, 1], [3, 0, 1]]       # clockwise from above: faces down
     q = np.array([quad, tri], float)
@@ -35,7 +35,7 @@ def test_patch_helpers_on_a_quad_and_a_triangle():
     assert tris.shape == (4, 3, 3) and list(ids) == [0, 0, 1, 1]
 
 
-def test_polygons_with_more_corners_are_fanned():
+def test02_polygons_with_more_corners_are_fanned():
     hexagon = truth.regular_polygon(1.0, 0.0, 6, facing_down=False)
     quads = polygon_to_quads(hexagon)
     assert quads.shape == (4, 4, 3)
@@ -43,7 +43,7 @@ def test_polygons_with_more_corners_are_fanned():
     assert np.allclose(patch_normals(quads), [0, 0, 1])
 
 
-def test_subdivision_keeps_area_and_orientation():
+def test03_subdivision_keeps_area_and_orientation():
     q = np.array([[[0, 0, 0], [2, 0, 0], [2.5, 1, 0], [0, 1, 0]], [[0, 0, 1], [0, 3, 1], [3, 0, 1], [3, 0, 1]]], float)
     sub, parent = subdivide_uniform(q, 3)
     assert sub.shape == (18, 4, 3) and list(np.bincount(parent)) == [9, 9]
@@ -51,7 +51,7 @@ def test_subdivision_keeps_area_and_orientation():
     assert np.allclose(patch_normals(sub), patch_normals(q)[parent])
 
 
-def test_cornell_box_patches():
+def test04_cornell_box_patches():
     quads, names, emission = scene_polygons(load_scene("cornell-box"))
     assert quads.shape == (16, 4, 3)
     assert names[-1] == "light" and list(emission[-1]) == [17, 12, 4] and not emission[:-1].any()
@@ -60,7 +60,7 @@ def test_cornell_box_patches():
     assert patch_areas(quads)[-1] == pytest.approx(105 * 130)
 
 
-def test_clipping_and_gauss_points():
+def test05_clipping_and_gauss_points():
     square = np.array([[0, 0, -1], [1, 0, -1], [1, 0, 1], [0, 0, 1]], float)
     part = clip_polygon_to_plane(square, np.zeros(3), np.array([0, 0, 1.0]))
     assert patch_areas(polygon_to_quads(part)).sum() == pytest.approx(1.0)
@@ -70,7 +70,7 @@ def test_clipping_and_gauss_points():
 
 # --- rows against closed forms ---------------------------------------------------------------
 
-def test_opposed_and_perpendicular_unit_squares_with_the_proximity_fix(ref):
+def test06_opposed_and_perpendicular_unit_squares_with_the_proximity_fix(ref):
     ff = HemicubeFormFactors(truth.opposed_squares(1, 1), ref, resolution=32)
     assert ff.matrix()[0, 1] == pytest.approx(0.19982, abs=2e-5)
     ff = HemicubeFormFactors(truth.perpendicular_squares(1, 1), ref, resolution=32)
@@ -79,7 +79,7 @@ def test_opposed_and_perpendicular_unit_squares_with_the_proximity_fix(ref):
     assert ff.counters["proximity_pairs"] == 2
 
 
-def test_without_the_fix_the_hemicube_converges_to_the_point_form_factor(ref):
+def test07_without_the_fix_the_hemicube_converges_to_the_point_form_factor(ref):
     q = np.array(truth.opposed_squares(1, 1), float)
     point = truth.contour([0.5, 0.5, 0], [0, 0, 1], q[1])                # 0.2395: the proximity error
     errors = []
@@ -90,13 +90,13 @@ def test_without_the_fix_the_hemicube_converges_to_the_point_form_factor(ref):
     assert abs(point - truth.howell_c11(1, 1, 1)) > 0.03                 # no resolution reaches the exact value
 
 
-def test_small_patch_under_a_disk(ref):
+def test08_small_patch_under_a_disk(ref):
     q = truth.small_patch_under_disk(0.01, 1.0, 1.0, 128)
     ff = HemicubeFormFactors(q, ref, resolution=128, proximity="none", rotate=True)
     assert ff.row(0)[1:].sum() == pytest.approx(truth.polygon_disk(1.0, 1.0, 128), rel=2e-3)
 
 
-def test_closed_cube_rows_sum_to_one_and_are_reciprocal(ref):
+def test09_closed_cube_rows_sum_to_one_and_are_reciprocal(ref):
     q = np.array(truth.cube(2), float)
     ff = HemicubeFormFactors(q, ref, resolution=64, proximity="none")
     F = ff.matrix()
@@ -115,7 +115,7 @@ def test_closed_cube_rows_sum_to_one_and_are_reciprocal(ref):
 
 # --- laziness, caching, batching, culling --------------------------------------------------------
 
-def test_rows_are_lazy_cached_and_batched(ref):
+def test10_rows_are_lazy_cached_and_batched(ref):
     q = np.array(truth.cube(2), float)
     ff = HemicubeFormFactors(q, ref, resolution=16, batch=8, proximity="none")
     assert ff.counters["hemicubes_rendered"] == 0 and ff._renderer is None     # nothing until asked
@@ -130,14 +130,14 @@ def test_rows_are_lazy_cached_and_batched(ref):
     assert ff.counters["patches_culled"] == 24 * 3
 
 
-def test_batching_does_not_change_rows(ref):
+def test11_batching_does_not_change_rows(ref):
     q = np.array(truth.cube(2), float)
     a = HemicubeFormFactors(q, ref, resolution=16, batch=1, seed=7).matrix()
     b = HemicubeFormFactors(q, ref, resolution=16, batch=100, seed=7).matrix()
     assert np.array_equal(a, b)
 
 
-def test_bad_arguments_are_refused(ref):
+def test12_bad_arguments_are_refused(ref):
     q = truth.cube(1)
     with pytest.raises(KitError, match="even"):
         HemicubeFormFactors(q, ref, resolution=31)
@@ -151,7 +151,7 @@ def test_bad_arguments_are_refused(ref):
 
 # --- ray casting, the comparison ---------------------------------------------------------------
 
-def test_ray_casting_agrees_with_closed_forms():
+def test13_ray_casting_agrees_with_closed_forms():
     samples = 40_000
     F = formfactor_matrix_raycast(truth.opposed_squares(1, 1), samples, seed=1)
     sigma = np.sqrt(0.2 * 0.8 / samples)
@@ -160,7 +160,7 @@ def test_ray_casting_agrees_with_closed_forms():
     assert F.sum(axis=1) == pytest.approx(1.0, abs=1e-3)     # every ray hits a face of a closed cube
 
 
-def test_hemicube_and_ray_casting_agree_on_the_cornell_box(ref):
+def test14_hemicube_and_ray_casting_agree_on_the_cornell_box(ref):
     quads, _, _ = scene_polygons(load_scene("cornell-box"))
     quads, _ = subdivide_uniform(quads, 3)
     rows = [9, 11, 24, len(quads) - 5]   # ceiling and back-wall patches, the light: no occluder close to them

@@ -54,7 +54,7 @@ def raycast_item_buffer(quads, views, resolution):
 
 
 @pytest.mark.parametrize("patch", [0, 2, 5, 12, 15])
-def test_item_buffer_matches_ray_casting_through_cell_centres(ref, patch):
+def test01_item_buffer_matches_ray_casting_through_cell_centres(ref, patch):
     quads, _, _ = scene_polygons(load_scene("cornell-box"))
     ff = HemicubeFormFactors(quads, ref, resolution=64, rotate=True, seed=3)
     views = ff.views_for(patch)
@@ -66,13 +66,13 @@ def test_item_buffer_matches_ray_casting_through_cell_centres(ref, patch):
     assert bad / total < 0.01, f"{bad} of {total} cells differ from ray casting"
 
 
-def test_stage_is_registered_with_its_tasks():
+def test02_stage_is_registered_with_its_tasks():
     assert "hemicube" in stage_names()
     stage = get_stage("hemicube")
     assert [t.id for t in stage.tasks] == ["H1", "H2", "H3", "H4", "H5", "H6"]
 
 
-def test_render_the_item_buffer_and_the_form_factors(ref):
+def test03_render_the_item_buffer_and_the_form_factors(ref):
     scene = load_scene("cornell-box")
     image = get_stage("hemicube").render(scene, ref, (96, 64))
     assert image.shape == (64, 96, 3) and np.isfinite(image).all() and image.max() > 0
@@ -84,25 +84,25 @@ def test_render_the_item_buffer_and_the_form_factors(ref):
 
 @pytest.mark.parametrize("options, message", [({"patch": 99}, "patch"), ({"resolution": 33}, "even"),
                                               ({"view": "x"}, "view")])
-def test_bad_options_name_the_field(ref, options, message):
+def test04_bad_options_name_the_field(ref, options, message):
     data = json.loads((BUNDLED_DIR / "cornell-box.json").read_text())
     data["options"] = {"hemicube": options}
     with pytest.raises((InputError, KitError), match=message):
         get_stage("hemicube").render(parse_scene(data, "cb"), ref, (32, 32))
 
 
-def test_tests_are_declared_with_points_and_tolerances():
+def test05_tests_are_declared_with_points_and_tolerances():
     tests = load_tests("hemicube")
     assert sum(t.points for t in tests) == 100
     assert {t.task for t in tests} == {f"H{i}" for i in range(1, 7)}
     assert all(t.tolerance for t in tests) and any(t.hidden for t in tests)
 
 
-def test_truth_quotes_are_what_the_tests_expect():
+def test06_truth_quotes_are_what_the_tests_expect():
     assert round(truth.howell_c11(1, 1, 1), 5) == 0.19982 and round(truth.howell_c14(1, 1, 1), 5) == 0.20004
 
 
-def test_starter_scores_zero_with_a_message_per_test():
+def test07_starter_scores_zero_with_a_message_per_test():
     result = grade("hemicube", "starter", show_progress=False)
     assert result.score == 0
     for r in result.results:
@@ -110,7 +110,7 @@ def test_starter_scores_zero_with_a_message_per_test():
 
 
 @pytest.mark.slow
-def test_reference_scores_full_marks():
+def test08_reference_scores_full_marks():
     result = grade("hemicube", "reference", show_progress=False)
     failed = [(r.test.number, r.verdict.message) for r in result.results if not r.verdict.passed]
     assert failed == [] and result.score == 100
@@ -124,7 +124,7 @@ def test_reference_scores_full_marks():
     ("itembuffer.py", "    return row[1:n + 1]", "    return row[:n]", "H5", ""),
     ("contour.py", "return float(abs(total) / (2 * np.pi))", "return float(abs(total) / np.pi)", "H6", ""),
 ])
-def test_one_broken_function_loses_points_there(make_submission, file, old, new, task, message):
+def test09_one_broken_function_loses_points_there(make_submission, file, old, new, task, message):
     result = grade("hemicube", make_submission("hemicube", file, old, new), show_progress=False)
     got = points_by_task(result)
     assert got[task] < 15 if task != "H5" else got[task] < 25
@@ -134,7 +134,7 @@ def test_one_broken_function_loses_points_there(make_submission, file, old, new,
         assert got["H2"] == 15 and got["H3"] == 10 and got["H4"] == 20
 
 
-def test_wrong_shape_from_the_tables_is_one_line(make_submission):
+def test10_wrong_shape_from_the_tables_is_one_line(make_submission):
     root = make_submission("hemicube", "tables.py", "    return top, side", "    return top, side.T")
     module = load_impl(resolve_impl(root, "hemicube"), "hemicube")
     with pytest.raises(KitError, match=r"H1 delta_form_factors\(\) side returned shape \(8, 4\), expected \(4, 8\)"):
