@@ -235,13 +235,20 @@ class MatrixRows:
         return self.rows(range(len(self.F)))
 
 
-def hemicube_formfactors(quads: np.ndarray, resolution: int = 128, proximity: str = "contour") -> Any:
-    """Stage 3's trusted hemicube engine over the reference hemicube implementation (lazy, cached rows)."""
+def hemicube_formfactors(quads: np.ndarray, resolution: int = 128, proximity: str = "contour", ctx: Any = None,
+                         batch: int = 256) -> Any:
+    """Stage 3's trusted hemicube engine over the reference hemicube implementation (lazy, cached rows).
+
+    Pass the GL context you draw with as ``ctx`` when you draw while rows are still being computed
+    (the demo): the engine renders into whichever context is current. ``batch`` hemicubes share a
+    read-back: 1 suits rows asked for one at a time (shooting), the default suits whole matrices.
+    """
     from ..formfactors import HemicubeFormFactors
     from ..impl import load_impl, resolve_impl
 
     impl = load_impl(resolve_impl("reference", "hemicube"), "hemicube")
-    return HemicubeFormFactors(quads, impl, resolution=resolution, proximity=proximity)
+    return HemicubeFormFactors(quads, impl, resolution=resolution, proximity=proximity, ctx=ctx,
+                               batch=batch)
 
 
 @dataclass
@@ -391,7 +398,9 @@ def solve_iterative(method: Literal["jacobi", "gauss-seidel"], F: np.ndarray, ar
 def solve(patches: Patches, impl: Any, opts: RadiosityOptions, rows: Any = None,
           on_shot: Callable | None = None) -> Solution:
     """Solve a scene's patches with the chosen solver; rows from the hemicube engine unless given."""
-    rows = rows if rows is not None else hemicube_formfactors(patches.quads, opts.resolution, opts.proximity)
+    if rows is None:
+        rows = hemicube_formfactors(patches.quads, opts.resolution, opts.proximity,
+                                    batch=1 if opts.solver == "progressive" else 256)
     a, rho, E = patches.areas, patches.reflectance, patches.emission
     if opts.solver == "progressive":
         return solve_progressive(impl, rows, a, rho, E, opts.tolerance, opts.max_shots, opts.overshoot, opts.ambient, on_shot)
@@ -450,9 +459,11 @@ class GouraudDrawer:
         self.program = self.ctx.program(vertex_shader=VERTEX_SHADER, fragment_shader=FRAGMENT_SHADER)
 
     def draw(self, positions: np.ndarray, colors: np.ndarray, corners: np.ndarray, mvp: np.ndarray,
-             width: int, height: int, background: Any = (0.0, 0.0, 0.0), fbo: Any = None) -> np.ndarray:
+             width: int, height: int, background: Any = (0.0, 0.0, 0.0), fbo: Any = None) -> np.ndarray | None:
+        """Draw into ``fbo`` (a window's screen: nothing is read back) or a new float framebuffer (returned)."""
         ctx = self.ctx
-        if fbo is None:
+        read = fbo is None
+        if read:
             fbo = ctx.framebuffer(color_attachments=[ctx.renderbuffer((width, height), 4, dtype="f4")],
                                   depth_attachment=ctx.depth_renderbuffer((width, height)))
         fbo.use()
@@ -467,9 +478,12 @@ class GouraudDrawer:
         self.program["u_mvp"].write(np.asarray(mvp, dtype="f4").T.tobytes())
         vao.render()
         ctx.finish()
-        data = np.frombuffer(fbo.read(components=3, dtype="f4"), dtype=np.float32).reshape(height, width, 3)
         for obj in (vao, ibo, vbo):
             obj.release()
+        if not read:
+            return None
+        data = np.frombuffer(fbo.read(components=3, dtype="f4"), dtype=np.float32).reshape(height, width, 3)
+        fbo.release()
         return np.flipud(data).astype(np.float64)
 
 
@@ -560,11 +574,134 @@ def probe_render(impl: Any, scene: dict, size: list[int], tolerance: float = 1e-
     return {"image": np.clip(image * sc.image.exposure, 0.0, 1.0), "display": sol.display}
 
 
+# --- the lecture demo: the solution building up shot by shot ---------------------------------
+
+def demo_shots(total_hint: int, frames: int | None) -> list[int]:
+    """Shots after which to show a frame: 0, 1, 2, 4, 8, … (the picture changes fastest early on)."""
+    shots = [0] + [2 ** k for k in range(0, 40) if 2 ** k <= max(total_hint, 1)]
+    return shots[:frames] if frames else shots
+
+
+def _demo(module: Any, output: Path, window: bool, frames: int | None, scene_name: str = "cornell-box",
+          size: tuple[int, int] = (256, 256)) -> list[Path]:
+    """Headless: frames (B alone | B + ρ·ambient) after 0, 1, 2, 4, … shots, as PNGs and one animated GIF.
+
+    With a window: the same two panels, redrawn as the shots go by.
+    """
+    from ..imageio import to_uint8
+    from ..scene import load_scene
+
+    scene = load_scene(scene_name)
+    opts = options(scene)
+    patches = make_patches(scene, module, opts.patch_size)
+    wanted = set(demo_shots(50 * len(patches), frames))
+    width, height = size
+    mvp = camera_matrix(scene, width, height)
+    a, rho = patches.areas, patches.reflectance
+    gl_window = _DemoWindow(2 * width, height) if window else None
+    drawer = GouraudDrawer(gl_window.ctx if gl_window else None)
+    rows = hemicube_formfactors(patches.quads, opts.resolution, opts.proximity, ctx=drawer.ctx, batch=1)
+    pictures: list[np.ndarray] = []
+
+    def panels(B: np.ndarray, dB: np.ndarray) -> list[np.ndarray]:
+        shown = [B, B + rho * ambient(module, a, rho, dB)]
+        out = []
+        for k, values in enumerate(shown):
+            positions, colors, corners = vertex_colors(module, patches.quads, patches.parent, values)
+            scaled = colors * (opts.exposure / math.pi)
+            if gl_window is not None:
+                gl_window.ctx.viewport = (k * width, 0, width, height)
+                drawer.draw(positions, scaled, corners, mvp, width, height, scene.image.background, gl_window.ctx.screen)
+            else:
+                out.append(drawer.draw(positions, scaled, corners, mvp, width, height, scene.image.background))
+        return out
+
+    def on_shot(shots: int, i: int, B: np.ndarray, dB: np.ndarray) -> None:
+        if shots in wanted:
+            pictures.append(np.hstack(panels(B, dB)) if gl_window is None else gl_window.show(lambda: panels(B, dB)))
+        if gl_window is not None and gl_window.closed:
+            raise _StopDemo
+
+    on_shot(0, -1, patches.emission.copy(), patches.emission.copy())
+    try:
+        sol = solve_progressive(module, rows, a, rho, patches.emission, opts.tolerance, opts.max_shots, opts.overshoot,
+                                True, on_shot)
+        on_shot(-1, -1, sol.radiosity, sol.unshot) if gl_window else pictures.append(np.hstack(panels(sol.radiosity, sol.unshot)))
+    except _StopDemo:
+        return []
+    finally:
+        if gl_window is not None:
+            gl_window.close()
+    if gl_window is not None:
+        return []
+    return _write_animation(output, [to_uint8(p, scene.image.exposure, scene.image.srgb) for p in pictures])
+
+
+class _StopDemo(Exception):
+    """The window was closed."""
+
+
+class _DemoWindow:
+    """A GLFW window for the demo (q or Escape closes it)."""
+
+    def __init__(self, width: int, height: int):
+        try:
+            import glfw
+            import moderngl
+        except ImportError as err:
+            raise KitError(f"the demo window needs glfw ({err}); run ./setup.sh") from None
+        if not glfw.init():
+            raise KitError("cannot open a window (glfw.init failed): is DISPLAY set? Use --no-window for images")
+        glfw.window_hint(glfw.CONTEXT_VERSION_MAJOR, 3)
+        glfw.window_hint(glfw.CONTEXT_VERSION_MINOR, 3)
+        glfw.window_hint(glfw.OPENGL_PROFILE, glfw.OPENGL_CORE_PROFILE)
+        self.glfw = glfw
+        self.win = glfw.create_window(width, height, "cs451 radiosity: B | B + ambient (q quits)", None, None)
+        if not self.win:
+            glfw.terminate()
+            raise KitError("cannot open a window (glfw.create_window failed); use --no-window for images")
+        glfw.make_context_current(self.win)
+        self.ctx = moderngl.create_context()
+        glfw.set_key_callback(self.win, self._key)
+        self.closed = False
+
+    def _key(self, win: Any, key: int, _scancode: int, action: int, _mods: int) -> None:
+        if action == self.glfw.PRESS and key in (self.glfw.KEY_Q, self.glfw.KEY_ESCAPE):
+            self.closed = True
+
+    def show(self, draw: Callable[[], Any]) -> np.ndarray:
+        draw()
+        self.glfw.swap_buffers(self.win)
+        self.glfw.poll_events()
+        self.closed = self.closed or self.glfw.window_should_close(self.win)
+        return np.zeros((1, 1, 3))
+
+    def close(self) -> None:
+        self.glfw.terminate()
+
+
+def _write_animation(folder: Path, frames: list[np.ndarray]) -> list[Path]:
+    from PIL import Image as PILImage
+
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for k, frame in enumerate(frames):
+        path = folder / f"radiosity-{k:02d}.png"
+        PILImage.fromarray(frame).save(path)
+        paths.append(path)
+    gif = folder / "radiosity.gif"
+    images = [PILImage.fromarray(f) for f in frames]
+    durations = [400] * (len(images) - 1) + [2000]
+    images[0].save(gif, save_all=True, append_images=images[1:], duration=durations, loop=0)
+    return [gif, *paths]
+
+
 STAGE = Stage(
     name="radiosity", number=4, title="Progressive refinement radiosity", handout="04-radiosity", tasks=TASKS,
     render=render,
     probes={"subdivide": probe_subdivide, "shoot": probe_shoot, "progressive": probe_progressive,
             "ambient": probe_ambient, "vertex_colors": probe_vertex_colors, "system": probe_system,
             "render": probe_render},
+    demo=_demo,
 )
 

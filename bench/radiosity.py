@@ -1,0 +1,282 @@
+"""``cs451 bench radiosity``: error against run time for progressive refinement and the full-matrix solvers.
+
+For each scene (the Cornell box, the room) and patch size, every method solves the same
+equations B = E + ρF̃B on the same hemicube rows (F̃ from the shooters' rows; see
+``shooting_matrix``), and its error is measured against the direct solve of the full matrix:
+the area-weighted relative L1 error of the displayed radiosity over the non-emitting patches.
+
+Run time counts the form factors. Progressive refinement renders a hemicube only when a
+patch shoots (one at a time, as the rows are asked for, timed for real from a fresh engine);
+Jacobi, Gauss-Seidel and the direct solve need every row first (rendered in batches, the
+engine's fastest way). The table gives the time and rows needed to reach 1% and 0.1%.
+
+With Mitsuba 3 installed (``pip install -e '.[peers]'``), the Cornell box's mean radiance per
+wall is compared with Mitsuba's path tracer on the same scene (optional: skipped cleanly
+without it).
+"""
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cs451.impl import load_impl, resolve_impl
+from cs451.scene import load_scene
+from cs451.stages import radiosity as R
+
+#: (scene, patch sizes) for the full and the quick run
+CASES = {False: [("cornell-box", [140.0, 100.0, 70.0, 50.0]), ("room", [0.5, 0.35, 0.25])],
+         True: [("cornell-box", [100.0, 50.0]), ("room", [0.5])]}
+#: progressive variants: (label, use_ambient, overshoot)
+VARIANTS = [("progressive", False, 1.0), ("progressive+ambient", True, 1.0),
+            ("progressive+overshoot", False, 1.5), ("progressive+overshoot+ambient", True, 1.5)]
+TARGETS = (1e-1, 1e-2, 1e-3)
+
+
+def relative_error(shown: np.ndarray, truth: np.ndarray, areas: np.ndarray, mask: np.ndarray) -> float:
+    """Σ A |shown − truth| / Σ A |truth| over the patches in ``mask`` and all channels."""
+    w = areas[mask, None]
+    return float((np.abs(shown[mask] - truth[mask]) * w).sum() / max((np.abs(truth[mask]) * w).sum(), 1e-300))
+
+
+def first_below(curve: list[tuple[float, float, int]], target: float) -> tuple[float | None, int | None]:
+    """(seconds, rows) of the first point of a (seconds, error, rows) curve at or below ``target``."""
+    for seconds, error, rows in curve:
+        if error <= target:
+            return seconds, rows
+    return None, None
+
+
+def run_case(ref: Any, scene_name: str, patch_size: float, resolution: int) -> dict:
+    scene = load_scene(scene_name)
+    opts = R.options(scene, patch_size=patch_size, resolution=resolution)
+    patches = R.make_patches(scene, ref, patch_size)
+    a, rho, E = patches.areas, patches.reflectance, patches.emission
+    n = len(patches)
+    mask = E.max(axis=1) == 0                                   # the error is over what is lit, not the lights
+
+    full = R.hemicube_formfactors(patches.quads, resolution, opts.proximity)
+    start = time.perf_counter()
+    F = full.matrix()
+    ff_seconds = time.perf_counter() - start
+    Fs = R.shooting_matrix(F, a)
+    start = time.perf_counter()
+    truth = R.solve_direct(Fs, rho, E)
+    direct_seconds = time.perf_counter() - start
+    out: dict[str, Any] = {"scene": scene_name, "patch_size": patch_size, "patches": n, "resolution": resolution,
+                           "formfactor_seconds_all_rows": ff_seconds, "methods": {}}
+    out["methods"]["direct"] = {"curve": [(ff_seconds + direct_seconds, 0.0, n)], "rows": n}
+
+    for method in ("jacobi", "gauss-seidel"):
+        curve: list[tuple[float, float, int]] = [(ff_seconds, relative_error(E, truth, a, mask), n)]
+        spent = [0.0]
+        last = [time.perf_counter()]
+
+        def on_sweep(k: int, B: np.ndarray) -> None:
+            now = time.perf_counter()
+            spent[0] += now - last[0]
+            curve.append((ff_seconds + spent[0], relative_error(B, truth, a, mask), n))
+            last[0] = time.perf_counter()
+
+        last[0] = time.perf_counter()
+        R.solve_iterative(method, Fs, a, rho, E, tolerance=1e-5, max_sweeps=500, on_sweep=on_sweep)
+        out["methods"][method] = {"curve": curve, "rows": n}
+
+    # progressive refinement renders a hemicube only when a patch first shoots: charge each row the
+    # measured cost of one lazily computed row (a fresh engine, one hemicube per read-back)
+    lazy = R.hemicube_formfactors(patches.quads, resolution, opts.proximity, batch=1)
+    sample = np.linspace(0, n - 1, min(n, 40)).astype(int)
+    lazy.row(int(sample[0]))                                    # the first row also builds the GPU state
+    start = time.perf_counter()
+    for i in sample[1:]:
+        lazy.row(int(i))
+    row_seconds = (time.perf_counter() - start) / max(len(sample) - 1, 1)
+    out["formfactor_seconds_per_lazy_row"] = row_seconds
+    for label, use_ambient, overshoot in VARIANTS:
+        rows = R.MatrixRows(F)                                  # the same rows, counted as they are first asked for
+        checkpoints = set(int(round(x)) for x in np.geomspace(1, 200 * n, 120))
+        curve = [(0.0, relative_error(E + (rho * R.ambient(ref, a, rho, E) if use_ambient else 0), truth, a, mask), 0)]
+        excluded = [0.0]
+        begin = time.perf_counter()
+
+        def on_shot(k: int, i: int, B: np.ndarray, dB: np.ndarray) -> None:
+            if k not in checkpoints:
+                return
+            t0 = time.perf_counter()
+            shown = B + rho * R.ambient(ref, a, rho, dB) if use_ambient else B
+            used = rows.counters["rows_computed"]
+            curve.append((t0 - begin - excluded[0] + used * row_seconds, relative_error(shown, truth, a, mask), used))
+            excluded[0] += time.perf_counter() - t0
+
+        sol = R.solve_progressive(ref, rows, a, rho, E, tolerance=1e-5, overshoot=overshoot, use_ambient=use_ambient,
+                                  on_shot=on_shot)
+        used = rows.counters["rows_computed"]
+        end = time.perf_counter() - begin - excluded[0] + used * row_seconds
+        curve.append((end, relative_error(sol.display, truth, a, mask), used))
+        out["methods"][label] = {"curve": curve, "rows": used, "shots": sol.steps}
+    for m in out["methods"].values():
+        for target in TARGETS:
+            m[f"seconds_to_{target:g}"], m[f"rows_to_{target:g}"] = first_below(m["curve"], target)
+    return out
+
+
+# --- Mitsuba 3 as a peer: mean radiance per wall of the Cornell box ---------------------------------
+
+WALLS = {"floor": [0], "ceiling": [1], "back": [2], "left (red)": [4], "right (green)": [3],
+         "short block": [5, 6, 7, 8, 9], "tall block": [10, 11, 12, 13, 14]}
+
+
+def polygon_ids(scene: Any, size: tuple[int, int]) -> np.ndarray:
+    """Which polygon each pixel shows (-1: none), drawn with the kit's Gouraud drawer from the scene camera."""
+    quads, _, _, _ = R.scene_polygons(scene)
+    ids = np.arange(len(quads), dtype=np.float64)
+    positions = quads.reshape(-1, 3)
+    colors = np.repeat(np.column_stack([ids + 1, np.zeros((len(ids), 2))]), 4, axis=0)
+    corners = np.arange(4 * len(quads)).reshape(-1, 4)
+    image = R.GouraudDrawer().draw(positions, colors, corners, R.camera_matrix(scene, *size), *size)
+    return np.round(image[..., 0]).astype(int) - 1
+
+
+def mitsuba_cornell(scene: Any, size: tuple[int, int], spp: int, max_depth: int) -> np.ndarray:
+    """The scene rendered by Mitsuba 3's path tracer (scalar_rgb), linear radiance (h, w, 3)."""
+    import mitsuba as mi
+    import tempfile
+
+    mi.set_variant("scalar_rgb")
+    quads, names, emission = R.scene_polygons(scene)[0], *R.scene_polygons(scene)[1:3]
+    _, reflectance, radiosity, _ = R.scene_polygons(scene)
+    cam = scene.camera
+    objects: dict[str, Any] = {"type": "scene", "integrator": {"type": "path", "max_depth": max_depth},
+                               "sensor": {"type": "perspective", "fov_axis": "y", "fov": cam.fovy,
+                                          "near_clip": cam.near, "far_clip": cam.far,
+                                          "to_world": mi.ScalarTransform4f().look_at(origin=list(cam.eye),
+                                                                                      target=list(cam.center),
+                                                                                      up=list(cam.up)),
+                                          "film": {"type": "hdrfilm", "width": size[0], "height": size[1],
+                                                   "rfilter": {"type": "box"}},
+                                          "sampler": {"type": "independent", "sample_count": spp}}}
+    folder = Path(tempfile.mkdtemp(prefix="cs451-mitsuba-"))
+    for k, quad in enumerate(quads):
+        path = folder / f"p{k}.obj"
+        lines = [f"v {x:.9g} {y:.9g} {z:.9g}" for x, y, z in quad] + ["f 1 2 3", "f 1 3 4"]
+        path.write_text("\n".join(lines) + "\n")
+        shape: dict[str, Any] = {"type": "obj", "filename": str(path), "face_normals": True,
+                                 "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(reflectance[k])}}}
+        if radiosity[k].max() > 0:
+            shape["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": list(radiosity[k] / math.pi)}}
+        objects[f"polygon{k}"] = shape
+    image = mi.render(mi.load_dict(objects))
+    return np.asarray(image, dtype=np.float64)[..., :3]
+
+
+def wall_means(image: np.ndarray, ids: np.ndarray) -> dict[str, list[float]]:
+    """Mean RGB per wall over its pixels, away from its edges (a 2-pixel erosion)."""
+    out = {}
+    for wall, polys in WALLS.items():
+        inside = np.isin(ids, polys)
+        eroded = inside.copy()
+        for dy in (-2, -1, 0, 1, 2):
+            for dx in (-2, -1, 0, 1, 2):
+                eroded &= np.roll(np.roll(inside, dy, axis=0), dx, axis=1)
+        if eroded.any():
+            out[wall] = image[eroded].mean(axis=0).tolist()
+    return out
+
+
+def compare_with_mitsuba(ref: Any, quick: bool) -> dict | None:
+    try:
+        import mitsuba  # noqa: F401
+    except ImportError:
+        print("Mitsuba 3 is not installed (pip install -e '.[peers]'): skipping the path-tracer comparison")
+        return None
+    scene = load_scene("cornell-box")
+    size = (128, 128) if quick else (256, 256)
+    spp = 64 if quick else 512
+    start = time.perf_counter()
+    ours = R.render(scene, ref, size, verbose=False)
+    ours_seconds = time.perf_counter() - start
+    start = time.perf_counter()
+    theirs = mitsuba_cornell(scene, size, spp, max_depth=64)
+    mitsuba_seconds = time.perf_counter() - start
+    ids = polygon_ids(scene, size)
+    a, b = wall_means(ours, ids), wall_means(theirs, ids)
+    rows = {w: {"radiosity": a[w], "mitsuba": b[w], "ratio": (np.array(a[w]) / np.maximum(b[w], 1e-12)).tolist()}
+            for w in a if w in b}
+    return {"size": list(size), "spp": spp, "max_depth": 64, "radiosity_seconds": ours_seconds,
+            "mitsuba_seconds": mitsuba_seconds, "walls": rows, "images": (ours, theirs)}
+
+
+# --- output ---------------------------------------------------------------------------------
+
+def _fmt(x: float | None) -> str:
+    return "—" if x is None else f"{x:.2f}"
+
+
+def print_table(results: list[dict]) -> list[str]:
+    head = "".join(f"  rows/s to {t:g}".rjust(19) for t in TARGETS)
+    lines = [f"{'scene':<12} {'patches':>7}  {'method':<30}{head}", "-" * (52 + 19 * len(TARGETS))]
+    for case in results:
+        for label, m in case["methods"].items():
+            cells = "".join(f"{str(m[f'rows_to_{t:g}'] or '—'):>10} /{_fmt(m[f'seconds_to_{t:g}']):>7}" for t in TARGETS)
+            lines.append(f"{case['scene']:<12} {case['patches']:>7}  {label:<30}{cells}")
+        lines.append(f"{'':<21}form factors: all rows batched {case['formfactor_seconds_all_rows']:.2f} s, "
+                     f"one lazy row {1e3 * case['formfactor_seconds_per_lazy_row']:.1f} ms")
+    print("\n".join(lines))
+    return lines
+
+
+def plot(results: list[dict], path: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(results), figsize=(4.2 * len(results), 4), squeeze=False)
+    styles = {"direct": ("k", "o"), "jacobi": ("tab:blue", "."), "gauss-seidel": ("tab:green", "."),
+              "progressive": ("tab:red", ""), "progressive+ambient": ("tab:orange", ""),
+              "progressive+overshoot": ("tab:purple", ""), "progressive+overshoot+ambient": ("tab:pink", "")}
+    for ax, case in zip(axes[0], results):
+        for label, m in case["methods"].items():
+            t = [max(p[0], 1e-3) for p in m["curve"]]
+            e = [max(p[1], 1e-6) for p in m["curve"]]
+            color, marker = styles.get(label, ("gray", ""))
+            ax.loglog(t, e, color=color, marker=marker, label=label, lw=1.2, ms=4)
+        ax.axhline(1e-2, color="gray", ls=":", lw=0.8)
+        ax.set_title(f"{case['scene']}, {case['patches']} patches", fontsize=9)
+        ax.set_xlabel("seconds (form factors included)")
+        ax.set_ylabel("relative error of B")
+        ax.grid(True, which="both", alpha=0.2)
+    axes[0][0].legend(fontsize=6)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(output: Path, quick: bool = False) -> None:
+    ref = load_impl(resolve_impl("reference", "radiosity"), "radiosity")
+    output.mkdir(parents=True, exist_ok=True)
+    results = []
+    for scene_name, sizes in CASES[quick]:
+        for patch_size in sizes:
+            results.append(run_case(ref, scene_name, patch_size, resolution=64 if quick else 128))
+            print(f"  {scene_name} at {patch_size}: {results[-1]['patches']} patches done", flush=True)
+    table = print_table(results)
+    peer = compare_with_mitsuba(ref, quick)
+    report: dict[str, Any] = {"cases": results, "table": table}
+    if peer is not None:
+        from cs451.imageio import save_png
+
+        ours, theirs = peer.pop("images")
+        save_png(output / "radiosity-cornell.png", ours, 1.0, True)
+        save_png(output / "mitsuba-cornell.png", theirs, 1.0, True)
+        print(f"\nCornell box, mean radiance per wall (R, G, B): radiosity ({peer['radiosity_seconds']:.1f} s) "
+              f"against Mitsuba 3 path tracing ({peer['spp']} spp, {peer['mitsuba_seconds']:.1f} s)")
+        for wall, row in peer["walls"].items():
+            print(f"  {wall:<14} {np.round(row['radiosity'], 4)}  {np.round(row['mitsuba'], 4)}  ratio {np.round(row['ratio'], 3)}")
+        report["mitsuba"] = peer
+    (output / "radiosity.json").write_text(json.dumps(report, indent=1))
+    plot(results, output / "radiosity.png")
+    print(f"wrote {output / 'radiosity.json'} and {output / 'radiosity.png'}")
