@@ -5,7 +5,8 @@ Three parts, printed as tables and written to ``hemicube.json`` and ``hemicube.p
 1. Closed-form configurations (autograder/hemicube/truth.py): a small patch under a
    coaxial disk (B-13) and under a unit square (exact by quadrature of the contour
    formula), small squares far apart and unit squares one apart (Howell C-11),
-   unit squares at right angles (C-14), each with and without the proximity fix. The error
+   unit squares at right angles (C-14), each without a fix, with the contour fix and with
+   the shooter split into 4 × 4 hemicubes. The error
    is |F - exact| / exact; for the small squares, whose few cells alias, it is the RMS over
    16 seeded rotations of the hemicube.
 2. The Cornell box (cs451/scenes/cornell-box.json) with every quad cut into k × k
@@ -58,7 +59,11 @@ def closed_forms(impl, resolutions: list[int], ctx) -> list[dict]:
          truth.howell_c11(0.1, 0.1, 1.0), "none", 16),
         ("C-11: unit squares 1 apart, no fix", truth.opposed_squares(1, 1), [1], truth.howell_c11(1, 1, 1), "none", 1),
         ("C-11: unit squares 1 apart, contour fix", truth.opposed_squares(1, 1), [1], truth.howell_c11(1, 1, 1), "contour", 1),
+        ("C-11: unit squares 1 apart, shooter split 4×4", truth.opposed_squares(1, 1), [1], truth.howell_c11(1, 1, 1),
+         "split4", 1),
         ("C-14: unit squares at 90°, no fix", truth.perpendicular_squares(1, 1), [1], truth.howell_c14(1, 1, 1), "none", 1),
+        ("C-14: unit squares at 90°, shooter split 4×4", truth.perpendicular_squares(1, 1), [1], truth.howell_c14(1, 1, 1),
+         "split4", 1),
         ("C-14: unit squares at 90°, contour fix", truth.perpendicular_squares(1, 1), [1], truth.howell_c14(1, 1, 1), "contour", 1),
     ]
     out = []
@@ -66,8 +71,9 @@ def closed_forms(impl, resolutions: list[int], ctx) -> list[dict]:
         for res in resolutions:
             errors, seconds = [], []
             for seed in range(seeds):
-                ff = HemicubeFormFactors(quads, impl, resolution=res, proximity=proximity, rotate=seeds > 1, seed=seed,
-                                         ctx=ctx)
+                split = 4 if proximity == "split4" else 1
+                ff = HemicubeFormFactors(quads, impl, resolution=res, proximity="none" if split > 1 else proximity,
+                                         rotate=seeds > 1, seed=seed, shooter_split=split, ctx=ctx)
                 ff.tables, ff.renderer               # build the GPU state outside the timing
                 t0 = time.perf_counter()
                 value = float(ff.row(0)[receivers].sum())
@@ -115,6 +121,12 @@ def cornell(impl, resolutions: list[int], reference_resolution: int, k: int, sam
     ff.matrix()
     fix = {"resolution": 128, "seconds_matrix": time.perf_counter() - t0, "proximity_pairs": ff.counters["proximity_pairs"],
            "reciprocity_error_total": ff.report()["reciprocity_error_total"]}
+    ff = HemicubeFormFactors(quads, impl, resolution=128, proximity="none", shooter_split=2, ctx=ctx)
+    ff.tables, ff.renderer
+    t0 = time.perf_counter()
+    ff.matrix()
+    fix["split2_seconds_matrix"] = time.perf_counter() - t0
+    fix["split2_reciprocity_error_total"] = ff.report()["reciprocity_error_total"]
     rays = []
     for samples in sample_counts:
         t0 = time.perf_counter()
@@ -171,6 +183,8 @@ def main(output: Path, quick: bool = False) -> None:
     fix = box["proximity_fix"]
     print(f"  with the proximity fix at 128: {fix['seconds_matrix']:.2f} s, {fix['proximity_pairs']} close pairs, "
           f"reciprocity error {fix['reciprocity_error_total']:.2%}")
+    print(f"  with the shooter split 2×2 at 128: {fix['split2_seconds_matrix']:.2f} s, "
+          f"reciprocity error {fix['split2_reciprocity_error_total']:.2%}")
     print("\nRay casting (Embree, cosine-weighted rays from each patch's centre), same scene, same error measure")
     print(f"{'rays/patch':>10s} {'error':>9s} {'matrix s':>9s} {'ms/row':>8s}")
     for r in box["raycast"]:

@@ -21,7 +21,8 @@ Proximity: the hemicube treats the shooter as a point at its centre, an error
 no resolution fixes when another patch is close to it. With ``proximity="contour"``
 the form factor to every close patch j is replaced by the area average over the
 shooter (Gauss points) of the exact point-to-polygon form factor (H6, Lambert's
-contour formula) times the fraction of j that the hemicube found visible.
+contour formula) times the fraction of j that the hemicube found visible. With
+``shooter_split=k`` each row averages k × k hemicubes spread over the shooter.
 """
 from __future__ import annotations
 
@@ -31,7 +32,7 @@ from typing import Any, Iterable
 import numpy as np
 
 from .errors import KitError
-from .patches import as_quads, patch_areas, patch_centers, patch_normals, patch_triangles
+from .patches import as_quads, patch_areas, patch_centers, patch_normals, patch_triangles, subdivide_uniform
 from .stages import hemicube as H
 
 #: Put in front of the student's vertex shader (H4); the kit defines the two functions after it.
@@ -259,12 +260,15 @@ class HemicubeFormFactors:
     point-to-polygon form factors averaged over the shooter for close pairs, H6) or
     "none"; ``proximity_distance`` how close is close, in shooter radii (centre to
     farthest corner) between the shooter's centre and the receiver's bounding sphere;
-    ``batch`` hemicubes per read-back (capped by the atlas size).
+    ``batch`` hemicubes per read-back (capped by the atlas size); ``shooter_split`` k renders
+    k × k hemicubes per row, at the centres of the shooter's k × k sub-quads, and averages
+    their rows by area (the other answer to the proximity error, and to occluders close to
+    the shooter, at k² the cost).
     """
 
     def __init__(self, quads: Any, impl: Any, resolution: int = 128, near: float | None = None, rotate: bool = True,
                  seed: int = 0, proximity: str = "contour", batch: int = 256, proximity_distance: float = 2.0,
-                 ctx: Any = None):
+                 shooter_split: int = 1, ctx: Any = None):
         self.quads = as_quads(quads)
         if len(self.quads) == 0:
             raise KitError("no patches")
@@ -277,6 +281,9 @@ class HemicubeFormFactors:
         self.resolution = int(resolution)
         self.rotate, self.seed, self.proximity = bool(rotate), int(seed), proximity
         self.proximity_distance = float(proximity_distance)
+        if int(shooter_split) != shooter_split or shooter_split < 1:
+            raise KitError(f"shooter_split must be a positive integer, got {shooter_split}")
+        self.shooter_split = int(shooter_split)
         self.normals = patch_normals(self.quads)
         self.areas = patch_areas(self.quads)
         self.centers = patch_centers(self.quads)
@@ -338,29 +345,46 @@ class HemicubeFormFactors:
     def cached(self) -> list[int]:
         return sorted(self._rows)
 
-    def views_for(self, i: int) -> np.ndarray:
+    def views_for(self, i: int, point: np.ndarray | None = None) -> np.ndarray:
+        """The five views (H2) of patch i's hemicube, at its centre or at ``point`` on it."""
         n = self.normals[i]
-        return H.call_views(self.impl, self.centers[i], n, hemicube_up(n, i, self.rotate, self.seed))
+        at = self.centers[i] if point is None else point
+        return H.call_views(self.impl, at, n, hemicube_up(n, i, self.rotate, self.seed))
+
+    def shooter_points(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+        """Where patch i's hemicubes stand: its centre, or with ``shooter_split`` k the centres of its k × k
+        bilinear sub-quads, with their area weights (summing to 1)."""
+        if self.shooter_split == 1:
+            return self.centers[i][None], np.ones(1)
+        sub, _ = subdivide_uniform(self.quads[i][None], self.shooter_split)
+        areas = patch_areas(sub)
+        return patch_centers(sub), areas / areas.sum()
 
     def _compute(self, batch: list[int]) -> None:
-        t0 = time.perf_counter()
-        views = np.stack([self.views_for(i) for i in batch])
-        buffers = self.renderer.render(views)
-        t1 = time.perf_counter()
-        self.counters["readbacks"] += 1
-        self.counters["hemicubes_rendered"] += len(batch)
+        t_render = t_sum = 0.0
+        jobs = [(i, p, w) for i in batch for p, w in zip(*self.shooter_points(i))]
+        rows = {i: np.zeros(self.n) for i in batch}
         top_w, side_w = self.tables
-        for i, (top, sides) in zip(batch, buffers):
-            row = H.call_row(self.impl, top, sides, top_w, side_w, self.n)
-            self._count_culled(i)
-            self._rows[i] = row
-            self.counters["rows_computed"] += 1
+        step = self.renderer.batch
+        for start in range(0, len(jobs), step):
+            chunk = jobs[start:start + step]
+            t0 = time.perf_counter()
+            views = np.stack([self.views_for(i, p) for i, p, _ in chunk])
+            buffers = self.renderer.render(views)
+            t1 = time.perf_counter()
+            self.counters["readbacks"] += 1
+            self.counters["hemicubes_rendered"] += len(chunk)
+            for (i, _, w), (top, sides) in zip(chunk, buffers):
+                rows[i] += w * H.call_row(self.impl, top, sides, top_w, side_w, self.n)
+            t_render += t1 - t0
+            t_sum += time.perf_counter() - t1
         t2 = time.perf_counter()
-        if self.proximity == "contour":
-            for i in batch:
-                self._rows[i] = self._proximity_fix(i, self._rows[i])
-        self.seconds["render"] += t1 - t0
-        self.seconds["sum"] += t2 - t1
+        for i in batch:
+            self._count_culled(i)
+            self._rows[i] = self._proximity_fix(i, rows[i]) if self.proximity == "contour" else rows[i]
+            self.counters["rows_computed"] += 1
+        self.seconds["render"] += t_render
+        self.seconds["sum"] += t_sum
         self.seconds["proximity"] += time.perf_counter() - t2
 
     def _count_culled(self, i: int) -> None:

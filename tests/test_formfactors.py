@@ -79,6 +79,15 @@ def test06_opposed_and_perpendicular_unit_squares_with_the_proximity_fix(ref):
     assert ff.counters["proximity_pairs"] == 2
 
 
+def test06b_splitting_the_shooter_converges_as_one_over_k_squared(ref):
+    errors = []
+    for k in (1, 2, 4):
+        ff = HemicubeFormFactors(truth.opposed_squares(1, 1), ref, resolution=64, proximity="none", shooter_split=k)
+        errors.append(abs(ff.row(0)[1] / truth.howell_c11(1, 1, 1) - 1))
+        assert ff.counters["hemicubes_rendered"] == k * k and ff.counters["rows_computed"] == 1
+    assert errors[0] > 0.19 and errors[1] < errors[0] / 3.5 and errors[2] < errors[1] / 3.5 and errors[2] < 0.015
+
+
 def test07_without_the_fix_the_hemicube_converges_to_the_point_form_factor(ref):
     q = np.array(truth.opposed_squares(1, 1), float)
     point = truth.contour([0.5, 0.5, 0], [0, 0, 1], q[1])                # 0.2395: the proximity error
