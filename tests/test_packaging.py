@@ -133,7 +133,7 @@ def release(request) -> Path:
 
 def test05_student_repository_holds_no_solution_and_no_hidden_test(release):
     files = {p.relative_to(release).as_posix() for p in release.rglob("*") if p.is_file()}
-    assert not [f for f in files if f.startswith("reference/") or f.endswith("hidden.py")]
+    assert not [f for f in files if f.startswith("reference/") or f.endswith("hidden.py")]  # sphere builds on nothing
     assert f"{STAGE}/camera.py" in files and ".github/workflows/classroom.yml" in files
     assert (release / STAGE / "camera.py").read_text() == (KIT_ROOT / "starter" / STAGE / "camera.py").read_text()
     assert json.loads((release / "autograder" / STAGE / "hidden.json").read_text())["count"] == 9

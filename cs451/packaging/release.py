@@ -134,6 +134,8 @@ def build_release(stage: str, output: str | Path) -> Path:
     for rel in ("cs451", "pyproject.toml", f"assignments/{st.handout}", "autograder/__init__.py"):
         copy_tree(rel, out)
     shutil.copytree(starter, out / stage, ignore=LITTER)
+    for earlier in st.builds_on:  # the engine runs their reference (their deadlines have passed)
+        copy_tree(f"reference/{earlier}", out)
     spec_dir = KIT_ROOT / "autograder" / stage
     shutil.copytree(spec_dir, out / "autograder" / stage,
                     ignore=shutil.ignore_patterns("hidden.py", "answers", "__pycache__", "*.pyc"))

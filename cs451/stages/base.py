@@ -35,6 +35,9 @@ class Stage:
     probes: dict[str, Callable[..., dict[str, np.ndarray]]] = field(default_factory=dict)
     #: demo(module, output: Path, window: bool, frames: int | None) -> list[Path] of files written (none in a window)
     demo: Callable[..., list] | None = None
+    #: earlier stages whose trusted reference this stage's engine runs (radiosity: the hemicube); a student
+    #: release of this stage ships their reference, whose solutions are out by the time this stage starts
+    builds_on: tuple[str, ...] = ()
 
     def task(self, task_id: str) -> Task:
         for t in self.tasks:
