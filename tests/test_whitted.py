@@ -189,3 +189,31 @@ def test14_starter_scores_zero_on_every_test():
     result = grade("whitted", "starter", show_progress=False)
     assert result.score == 0 and result.max_score == 100
     assert all("not implemented yet" in r.verdict.message for r in result.results)
+
+
+def _points_by_task(result):
+    out = {}
+    for r in result.results:
+        out[r.test.task] = out.get(r.test.task, 0.0) + r.score
+    return out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("file, old, new, task, also", [
+    ("camera.py", "y = (1.0 - 2.0 * (np.arange(height) + 0.5) / height) * tan_y",
+     "y = (2.0 * (np.arange(height) + 0.5) / height - 1.0) * tan_y", "W1", set()),           # rows from the bottom
+    ("optics.py", "t = eta[:, None] * d + (eta * cos_i - cos_t)[:, None] * n",
+     "t = eta[:, None] * d - (eta * cos_i - cos_t)[:, None] * n", "W9", {"W11"}),             # bent the wrong way
+])
+def test15_one_broken_function_loses_its_task_only(make_submission, file, old, new, task, also):
+    """Every test but the image tests feeds trusted inputs, so a bug costs its own task (and W11's images)."""
+    from cs451.grading.runner import grade
+    result = grade("whitted", make_submission("whitted", file, old, new), show_progress=False)
+    got = _points_by_task(result)
+    full = {t.id: 0.0 for t in get_stage("whitted").tasks}
+    from cs451.grading.runner import load_tests
+    for t in load_tests("whitted"):
+        full[t.task] += t.points
+    assert got[task] < full[task]
+    assert {k: v for k, v in got.items() if k != task and k not in also} == \
+        {k: v for k, v in full.items() if k != task and k not in also}

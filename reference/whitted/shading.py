@@ -38,13 +38,13 @@ def shadow_transmission(scene: TraceScene, origins: np.ndarray, targets: np.ndar
     no need for the closest one. Adds the rays to ``scene.counters["shadow"]``.
     """
     # BEGIN SOLUTION W7: any-hit traversal that multiplies transmittances and stops at an opaque blocker (handout §W7)
-    from .bvh import COMPILED_RAYS, packed
+    from .bvh import packed, use_compiled
     o = np.ascontiguousarray(origins, dtype=np.float64)
     seg = np.asarray(targets, dtype=np.float64) - o
     dist = np.linalg.norm(seg, axis=1)
     d = np.ascontiguousarray(seg / np.where(dist > 0, dist, 1.0)[:, None])
     n = len(o)
-    if n < COMPILED_RAYS:
+    if not use_compiled(n):
         from .wavefront import transmission as transmission_numpy
         out, nodes, tests = transmission_numpy(scene, o, d, dist)
         scene.counters["shadow"] += n
