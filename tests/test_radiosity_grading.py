@@ -1,0 +1,94 @@
+"""Stage 4 from the outside: grading (reference 100, starter 0, a broken task loses its points), the CLI, the demo."""
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from cs451 import KIT_ROOT
+from cs451.grading.runner import grade, load_tests
+from cs451.impl import load_impl, resolve_impl
+from cs451.stages import radiosity as R
+
+REF = load_impl(resolve_impl("reference", "radiosity"), "radiosity")
+
+
+def points_by_task(result) -> dict[str, float]:
+    out: dict[str, float] = {}
+    for r in result.results:
+        out[r.test.task] = out.get(r.test.task, 0.0) + r.score
+    return out
+
+
+def test01_tests_are_declared_with_points_visibility_and_tolerance():
+    tests = load_tests("radiosity")
+    assert sum(t.points for t in tests) == 100
+    assert {t.task for t in tests} == {f"R{i}" for i in range(1, 6)}
+    assert any(t.hidden for t in tests) and any(not t.hidden for t in tests)
+    assert all(t.tolerance for t in tests) and len({t.number for t in tests}) == len(tests)
+
+
+@pytest.fixture(scope="module")
+def reference_grade():
+    return grade("radiosity", "reference", show_progress=False)
+
+
+def test02_reference_scores_full_marks(reference_grade):
+    failed = [(r.test.number, r.verdict.message) for r in reference_grade.results if not r.verdict.passed]
+    assert failed == [] and reference_grade.score == 100
+
+
+def test03_starter_scores_zero_with_a_hint_per_test():
+    result = grade("radiosity", "starter", show_progress=False)
+    assert result.score == 0
+    assert all("not implemented yet" in r.verdict.message for r in result.results)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("file,old,new,lost", [
+    ("patches.py", "cells = np.stack([grid[:-1, :-1], grid[:-1, 1:], grid[1:, 1:], grid[1:, :-1]], axis=2)",
+     "cells = np.stack([grid[:-1, :-1], grid[1:, :-1], grid[1:, 1:], grid[:-1, 1:]], axis=2)", {"R1"}),
+    ("shooting.py", "return (unshot * areas[:, None]).sum(axis=0) / total / (1.0 - rho_avg)",
+     "return (unshot * areas[:, None]).sum(axis=0) / total", {"R4"}),
+    ("display.py", "return positions, sums / counts[:, None], inverse.astype(np.int64)",
+     "return positions, sums / 4.0, inverse.astype(np.int64)", {"R5"}),
+    ("shooting.py", "received = reflectance * (row * (areas[i] / areas))[:, None]", "received = reflectance * row[:, None]",
+     {"R2", "R3", "R5"}),
+])
+def test04_one_broken_function_loses_its_task_and_what_calls_it(make_submission, file, old, new, lost):
+    result = grade("radiosity", make_submission("radiosity", file, old, new), show_progress=False)
+    full = {t: sum(x.points for x in load_tests("radiosity") if x.task == t) for t in ("R1", "R2", "R3", "R4", "R5")}
+    got = points_by_task(result)
+    for task, points in full.items():
+        if task in lost:
+            assert got[task] < points, f"breaking {file} should cost {task} points"
+        else:
+            assert got[task] == points, f"breaking {file} cost {task} {points - got[task]} points"
+
+
+def test05_demo_writes_frames_and_an_animation(tmp_path):
+    paths = R._demo(REF, tmp_path, window=False, frames=4, scene_name="furnace", size=(48, 48))
+    assert paths[0].name == "radiosity.gif" and len(paths) == 1 + 5          # 4 frames after shots, and the answer
+    with Image.open(paths[0]) as gif:
+        assert gif.n_frames == 5
+    first, last = (np.asarray(Image.open(p), dtype=float) for p in (paths[1], paths[-1]))
+    assert first.shape == (48, 96, 3)
+    # before any shot the furnace shows B = E (left) and the exact answer E/(1 - ρ) with the ambient term (right)
+    assert first[:, 48:].mean() > first[:, :48].mean() + 20
+    assert np.allclose(last[:, :48], last[:, 48:], atol=2)
+
+
+@pytest.mark.slow
+def test06_cli_renders_the_cornell_box(tmp_path):
+    out = tmp_path / "r.png"
+    done = subprocess.run([sys.executable, "-m", "cs451", "render", "cornell-box", "--stage", "radiosity", "-o", str(out)],
+                          cwd=KIT_ROOT, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    image = np.asarray(Image.open(out), dtype=float)
+    assert image.shape == (256, 256, 3)
+    left, right = image[100:150, 5:30].mean(axis=(0, 1)), image[100:150, 226:251].mean(axis=(0, 1))
+    assert left[0] > 2 * left[1] and right[1] > 1.3 * right[0], "the red wall is on the left, the green on the right"
+    assert "converged" in done.stderr and "rows computed" in done.stderr
