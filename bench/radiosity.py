@@ -210,6 +210,43 @@ def compare_with_mitsuba(ref: Any, quick: bool) -> dict | None:
             "mitsuba_seconds": mitsuba_seconds, "walls": rows, "images": (ours, theirs)}
 
 
+# --- the white furnace: B = E / (1 − ρ) --------------------------------------------------------
+
+def furnace_figures(ref: Any, quick: bool) -> list[dict]:
+    """The furnace box (E = 1) at ρ = 0.5, 0.9, 0.99: exact form factors (Howell's cube) and hemicube rows."""
+    from cs451.patches import patch_areas, patch_normals
+
+    import sys
+    from cs451 import KIT_ROOT
+    if str(KIT_ROOT) not in sys.path:
+        sys.path.insert(0, str(KIT_ROOT))
+    from autograder.radiosity import truth as T
+
+    scene = load_scene("furnace")
+    cube, _, _, _ = R.scene_polygons(scene)
+    patches = R.make_patches(scene, ref, R.options(scene).patch_size)
+    cases = [("exact (Howell, 6 patches)", R.MatrixRows(T.cube_formfactors(patch_normals(cube))), patch_areas(cube)),
+             (f"hemicube 128, {len(patches)} patches", R.MatrixRows(
+                 R.hemicube_formfactors(patches.quads, 128, "none").matrix()), patches.areas)]
+    out = []
+    for label, rows, areas in cases:
+        n = len(areas)
+        for rho in (0.5, 0.9, 0.99):
+            for overshoot in (1.0, 1.5):
+                sol = R.solve_progressive(ref, rows, areas, np.full((n, 3), rho), np.ones((n, 3)), tolerance=1e-4,
+                                          max_shots=200_000, overshoot=overshoot, use_ambient=False)
+                err = sol.radiosity[:, 0] / T.furnace(1.0, rho) - 1
+                mean = float((sol.radiosity[:, 0] * areas).sum() / areas.sum() / T.furnace(1.0, rho) - 1)
+                out.append({"form_factors": label, "albedo": rho, "overshoot": overshoot, "shots": sol.steps,
+                            "converged": sol.converged, "mean_error": mean, "max_abs_error": float(np.abs(err).max())})
+    print("\nwhite furnace, E = 1, tolerance 1e-4: B against E/(1 − ρ)")
+    print(f"{'form factors':<28} {'ρ':>5} {'ω':>4} {'shots':>7} {'mean error':>11} {'max |error|':>12}")
+    for r in out:
+        print(f"{r['form_factors']:<28} {r['albedo']:>5} {r['overshoot']:>4} {r['shots']:>7} {r['mean_error']:>+11.2e} "
+              f"{r['max_abs_error']:>12.2e}" + ("" if r["converged"] else "  (not converged)"))
+    return out
+
+
 # --- output ---------------------------------------------------------------------------------
 
 def _fmt(x: float | None) -> str:
@@ -264,8 +301,9 @@ def main(output: Path, quick: bool = False) -> None:
             results.append(run_case(ref, scene_name, patch_size, resolution=64 if quick else 128))
             print(f"  {scene_name} at {patch_size}: {results[-1]['patches']} patches done", flush=True)
     table = print_table(results)
+    furnace = furnace_figures(ref, quick)
     peer = compare_with_mitsuba(ref, quick)
-    report: dict[str, Any] = {"cases": results, "table": table}
+    report: dict[str, Any] = {"cases": results, "table": table, "furnace": furnace}
     if peer is not None:
         from cs451.imageio import save_png
 

@@ -148,10 +148,15 @@ def test06_full_matrix_solvers_agree_with_the_direct_solve(method):
     assert sol.converged and np.abs(sol.radiosity - want).max() <= 1e-7 * want.max(), sol.message
 
 
-def test07_cornell_box_on_hemicube_rows_converges_to_the_direct_solve():
-    scene = load_scene("cornell-box")
-    patches = R.make_patches(scene, REF, 140.0)
-    rows = R.hemicube_formfactors(patches.quads, 32)
+@pytest.fixture(scope="module")
+def cornell_rows():
+    """The Cornell box at 140 mm and its hemicube rows (resolution 32), shared by the tests that need every row."""
+    patches = R.make_patches(load_scene("cornell-box"), REF, 140.0)
+    return patches, R.hemicube_formfactors(patches.quads, 32)
+
+
+def test07_cornell_box_on_hemicube_rows_converges_to_the_direct_solve(cornell_rows):
+    patches, rows = cornell_rows
     sol = R.solve_progressive(REF, rows, patches.areas, patches.reflectance, patches.emission, tolerance=1e-7,
                               use_ambient=False)
     F, A = rows.matrix(), patches.areas
@@ -318,3 +323,18 @@ def test18_furnace_renders_its_radiance_and_conserves_its_energy_on_hemicube_row
     image = R.draw_solution(scene, REF, patches, sol.display, (64, 64))
     assert image.shape == (64, 64, 3) and np.allclose(image, 2.0 / np.pi, rtol=0.03)
     assert np.allclose(image[..., 0], image[..., 2]), "a grey furnace renders grey"
+
+
+def test19_every_solver_option_solves_the_same_equations(cornell_rows):
+    """solver = progressive, jacobi, gauss-seidel, direct on the same hemicube rows: the same B within the tolerance."""
+    scene = load_scene("cornell-box")
+    patches, rows = cornell_rows
+    results = {}
+    for solver in R.SOLVERS:
+        opts = R.options(scene, solver=solver, tolerance=1e-6, patch_size=140.0, ambient=False)
+        results[solver] = R.solve(patches, REF, opts, rows)
+        assert results[solver].converged, results[solver].message
+    want = results["direct"].radiosity
+    for solver, sol in results.items():
+        assert np.abs(sol.radiosity - want).sum() / want.sum() < 1e-5, solver
+    assert rows.counters["hemicubes_rendered"] == len(patches), "the full-matrix solvers reuse the cached rows"

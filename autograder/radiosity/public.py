@@ -4,7 +4,9 @@ Points per task (the rubric in assignments/04-radiosity/README.md):
 R1 15, R2 15, R3 35, R4 10, R5 25 in all; hidden.py holds part of each task's points.
 
 Scene tests get their patches and form factors from the reference run of the probe
-``system`` (stage 3's trusted hemicube engine), so a bug in one task costs that task only.
+``system`` (stage 3's trusted hemicube engine), so a bug in R1 or in stage 3 costs nothing
+elsewhere. R3's tests run the submission's own R2 inside its loop, and the image tests its
+R3, R4 and R5 (tests/test_radiosity_grading.py checks which tasks a broken function costs).
 """
 from __future__ import annotations
 

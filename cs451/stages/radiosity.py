@@ -704,5 +704,6 @@ STAGE = Stage(
             "ambient": probe_ambient, "vertex_colors": probe_vertex_colors, "system": probe_system,
             "render": probe_render},
     demo=_demo,
+    builds_on=("hemicube",),
 )
 
