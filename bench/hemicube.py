@@ -138,11 +138,21 @@ def cornell(impl, resolutions: list[int], reference_resolution: int, k: int, sam
             "reference_seconds": ref_seconds, "hemicube": hemi, "raycast": rays, "proximity_fix": fix}
 
 
-def time_at_error(points: list[dict], error: float) -> float | None:
-    """Seconds for the full matrix at ``error``, interpolated log-log between measured points (None if never reached)."""
+def time_at_error(points: list[dict], error: float, extrapolate: bool = False) -> float | None:
+    """Seconds for the full matrix at ``error``, interpolated log-log between measured points.
+
+    Below the smallest measured error: None, or with ``extrapolate`` the log-log line through the
+    two most accurate points (for Monte Carlo, error ∝ 1/√samples ∝ 1/√time).
+    """
     pts = sorted((p["error"], p["seconds_matrix"]) for p in points)
-    if not pts or pts[0][0] > error:
+    if not pts:
         return None
+    if pts[0][0] > error:
+        if not extrapolate or len(pts) < 2:
+            return None
+        (e0, t0), (e1, t1) = pts[0], pts[1]
+        slope = (np.log(t1) - np.log(t0)) / (np.log(e1) - np.log(e0))
+        return float(np.exp(np.log(t0) + slope * (np.log(error) - np.log(e0))))
     for (e0, t0), (e1, t1) in zip(pts, pts[1:]):
         if e0 <= error <= e1 and e1 > e0:
             w = (np.log(error) - np.log(e0)) / (np.log(e1) - np.log(e0))
@@ -193,10 +203,14 @@ def main(output: Path, quick: bool = False) -> None:
     equal = []
     for target in (0.10, 0.05, 0.02, 0.01):
         th, tr = time_at_error(box["hemicube"], target), time_at_error(box["raycast"], target)
-        equal.append({"error": target, "hemicube_seconds": th, "raycast_seconds": tr})
+        extrapolated = tr is None
+        if extrapolated:
+            tr = time_at_error(box["raycast"], target, extrapolate=True)
+        equal.append({"error": target, "hemicube_seconds": th, "raycast_seconds": tr, "raycast_extrapolated": extrapolated})
         fmt = lambda t: "not reached" if t is None else f"{t:.2f}"
-        ratio = f"  ({tr / th:.1f}× faster)" if th and tr else ""
-        print(f"  error {target:5.0%}: hemicube {fmt(th):>11s}, ray casting {fmt(tr):>11s}{ratio}")
+        ratio = f"  (hemicube {tr / th:.0f}× faster)" if th and tr else ""
+        mark = " (extrapolated)" if extrapolated and tr else ""
+        print(f"  error {target:5.0%}: hemicube {fmt(th):>11s}, ray casting {fmt(tr):>11s}{mark}{ratio}")
     box["equal_error"] = equal
 
     data = {"renderer": renderer_name(ctx), "quick": quick, "closed_forms": forms, "cornell": box}

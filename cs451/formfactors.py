@@ -244,7 +244,7 @@ class ItemBufferRenderer:
         for b in range(count):
             col, row = b % self.cols, b // self.cols
             tile = atlas[row * 3 * r:(row + 1) * 3 * r, col * r:(col + 1) * r]
-            out.append((tile[:r], tile[r:].reshape(4, r // 2, r)))
+            out.append((tile[:r].copy(), tile[r:].reshape(4, r // 2, r).copy()))   # writable, for the student's H5
         for i in range(5):
             ctx.disable_direct(0x3000 + i)
         return out
@@ -370,7 +370,8 @@ class HemicubeFormFactors:
             chunk = jobs[start:start + step]
             t0 = time.perf_counter()
             views = np.stack([self.views_for(i, p) for i, p, _ in chunk])
-            buffers = self.renderer.render(views)
+            planes = np.array([[*self.normals[i], self.normals[i] @ self.centers[i]] for i, _, _ in chunk])
+            buffers = self.renderer.render(views, planes)     # the base plane from the geometry, not from H2
             t1 = time.perf_counter()
             self.counters["readbacks"] += 1
             self.counters["hemicubes_rendered"] += len(chunk)
