@@ -72,7 +72,7 @@ void main() {
 }
 """
 MAX_ATLAS = 4096      # pixels on a side of the item-buffer atlas
-PROXIMITY_GAUSS = 6   # Gauss-Legendre points per side of the shooter for close pairs
+PROXIMITY_GAUSS = 5   # Gauss-Legendre points per side of the shooter for close pairs (C-14, 1 × 0.5 to 1 × 2: 0.07%)
 
 
 def default_up(normal: np.ndarray) -> np.ndarray:
