@@ -264,6 +264,13 @@ class HemicubeFormFactors:
     k × k hemicubes per row, at the centres of the shooter's k × k sub-quads, and averages
     their rows by area (the other answer to the proximity error, and to occluders close to
     the shooter, at k² the cost).
+
+    ``counters``: hemicubes_rendered (k² per row with a split shooter), rows_computed,
+    rows_cached_hits (rows asked for again), patches_culled (summed over rows: patches wholly
+    in or behind the shooter's plane, which the base-plane clip discards), patches_backfacing
+    (in front of the plane but facing away: drawn, they hide what is behind them, receive 0),
+    proximity_pairs (close pairs the contour fix replaced), readbacks (one per batch).
+    ``seconds``: render (draw and read back), sum (H5), proximity (the fix).
     """
 
     def __init__(self, quads: Any, impl: Any, resolution: int = 128, near: float | None = None, rotate: bool = True,
