@@ -55,13 +55,18 @@ def packed(scene: TraceScene) -> dict:
     if cached is not None:
         return cached
     bvh = scene.bvh
-    empty3 = np.zeros((1, 3))
     one = np.zeros(1, np.int64)
     if bvh is None:
-        tree = (empty3, empty3, one - 1, one, one, one, False)
+        tree = (np.zeros((1, 8), np.float32), one - 1, one, one, one, False)
     else:
-        tree = (np.ascontiguousarray(bvh["lo"], np.float64), np.ascontiguousarray(bvh["hi"], np.float64),
-                np.ascontiguousarray(bvh["child"], np.int64), np.ascontiguousarray(bvh["start"], np.int64),
+        # node boxes in float32, rounded outwards, 32 bytes a node: the tree stays in the CPU's cache
+        lo, hi = np.asarray(bvh["lo"], np.float64), np.asarray(bvh["hi"], np.float64)
+        lo32, hi32 = lo.astype(np.float32), hi.astype(np.float32)
+        lo32 = np.where(lo32 > lo, np.nextafter(lo32, np.float32(-np.inf)), lo32)
+        hi32 = np.where(hi32 < hi, np.nextafter(hi32, np.float32(np.inf)), hi32)
+        box = np.zeros((len(lo), 8), np.float32)
+        box[:, :3], box[:, 3:6] = lo32, hi32
+        tree = (box, np.ascontiguousarray(bvh["child"], np.int64), np.ascontiguousarray(bvh["start"], np.int64),
                 np.ascontiguousarray(bvh["count"], np.int64), np.ascontiguousarray(bvh["order"], np.int64), True)
     sph = np.ascontiguousarray(np.column_stack([scene.sphere_center, scene.sphere_radius]).reshape(-1, 4))
     tri = np.ascontiguousarray(np.concatenate([scene.tri_v0, scene.tri_v1, scene.tri_v2], axis=1).reshape(-1, 9))

@@ -74,12 +74,13 @@ def _triangle(o, kx, ky, kz, sx, sy, sz, tri, i, tmax):
 
 
 @njit(**_JIT)
-def _box(lo, hi, n, o, inv, tmax):
+def _box(box, n, o, inv, tmax):
+    """Entry distance of a ray into node n's box (float32, rounded outwards), or inf."""
     t0 = 0.0
     t1 = tmax
     for a in range(3):
-        ta = (lo[n, a] - o[a]) * inv[a]
-        tb = (hi[n, a] - o[a]) * inv[a]
+        ta = (np.float64(box[n, a]) - o[a]) * inv[a]
+        tb = (np.float64(box[n, 3 + a]) - o[a]) * inv[a]
         if ta > tb:
             ta, tb = tb, ta
         if ta > t0:
@@ -105,7 +106,7 @@ def _shear(d):
 
 
 @njit(**_JIT)
-def closest(O, D, lo, hi, child, start, count, order, use_bvh, nsph, sph, tri, planes, tri_normal, out_t, out_prim,
+def closest(O, D, box, child, start, count, order, use_bvh, nsph, sph, tri, planes, tri_normal, out_t, out_prim,
             out_n, stats):
     """Closest hit of each ray: t (inf on a miss), primitive number (-1), unit normal; stats[i] = (nodes, tests)."""
     stack = np.empty(STACK, np.int64)
@@ -133,7 +134,7 @@ def closest(O, D, lo, hi, child, start, count, order, use_bvh, nsph, sph, tri, p
                     prim = nb + p
         if use_bvh:
             nodes += 1
-            if _box(lo, hi, 0, o, inv, best) < math.inf:
+            if _box(box, 0, o, inv, best) < math.inf:
                 sp = 1
                 stack[0] = 0
                 snear[0] = 0.0
@@ -171,8 +172,8 @@ def closest(O, D, lo, hi, child, start, count, order, use_bvh, nsph, sph, tri, p
                         prim = k
             else:
                 nodes += 2
-                ta = _box(lo, hi, c, o, inv, best)
-                tb = _box(lo, hi, c + 1, o, inv, best)
+                ta = _box(box, c, o, inv, best)
+                tb = _box(box, c + 1, o, inv, best)
                 if ta > tb:
                     if ta < math.inf:
                         stack[sp] = c
@@ -240,7 +241,7 @@ def _attenuate(T, k, t, o, d, nb, prim_mat, trans, planes, pframe, checker, chec
 
 
 @njit(**_JIT)
-def transmission(O, D, TMAX, lo, hi, child, start, count, order, use_bvh, nsph, sph, tri, planes, pframe,
+def transmission(O, D, TMAX, box, child, start, count, order, use_bvh, nsph, sph, tri, planes, pframe,
                  checker, checker_mat, prim_mat, trans, out, stats):
     """Shadow rays: out[i] = product of the transmittances crossed on (0, TMAX[i]); stops at an opaque one."""
     stack = np.empty(STACK, np.int64)
@@ -272,7 +273,7 @@ def transmission(O, D, TMAX, lo, hi, child, start, count, order, use_bvh, nsph, 
         if not blocked:
             if use_bvh:
                 nodes += 1
-                if _box(lo, hi, 0, o, inv, tmax) < math.inf:
+                if _box(box, 0, o, inv, tmax) < math.inf:
                     stack[0] = 0
                     sp = 1
             else:
@@ -314,10 +315,10 @@ def transmission(O, D, TMAX, lo, hi, child, start, count, order, use_bvh, nsph, 
                             break
             else:
                 nodes += 2
-                if _box(lo, hi, c, o, inv, tmax) < math.inf:
+                if _box(box, c, o, inv, tmax) < math.inf:
                     stack[sp] = c
                     sp += 1
-                if _box(lo, hi, c + 1, o, inv, tmax) < math.inf:
+                if _box(box, c + 1, o, inv, tmax) < math.inf:
                     stack[sp] = c + 1
                     sp += 1
         for a in range(3):
