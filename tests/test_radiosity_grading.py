@@ -92,3 +92,20 @@ def test06_cli_renders_the_cornell_box(tmp_path):
     left, right = image[100:150, 5:30].mean(axis=(0, 1)), image[100:150, 226:251].mean(axis=(0, 1))
     assert left[0] > 2 * left[1] and right[1] > 1.3 * right[0], "the red wall is on the left, the green on the right"
     assert "converged" in done.stderr and "rows computed" in done.stderr
+
+
+@pytest.mark.slow
+def test07_bench_writes_its_table_json_and_plot(tmp_path):
+    done = subprocess.run([sys.executable, "-m", "cs451", "bench", "radiosity", "--quick", "-o", str(tmp_path)],
+                          cwd=KIT_ROOT, capture_output=True, text=True, timeout=1200)
+    assert done.returncode == 0, done.stderr
+    import json
+    report = json.loads((tmp_path / "radiosity.json").read_text())
+    assert (tmp_path / "radiosity.png").stat().st_size > 10_000
+    methods = set(report["cases"][0]["methods"])
+    assert {"direct", "jacobi", "gauss-seidel", "progressive", "progressive+ambient", "progressive+overshoot",
+            "progressive+overshoot+ambient"} <= methods
+    for case in report["cases"]:                       # every method gets within 0.1% of the direct solve
+        assert all(m["seconds_to_0.001"] is not None for m in case["methods"].values()), case["scene"]
+    exact = [f for f in report["furnace"] if f["form_factors"].startswith("exact")]
+    assert all(abs(f["mean_error"]) <= 1e-4 for f in exact)

@@ -107,7 +107,8 @@ def scene_polygons(scene: Scene) -> tuple[np.ndarray, np.ndarray, np.ndarray, li
     labels = []
     for k, obj in enumerate(scene.objects):
         if isinstance(obj, Polygon):
-            labels += [f"objects[{k}]"] * max(1, len(obj.vertices) - 2 if len(obj.vertices) > 4 else 1)
+            fan = len(obj.vertices) - 2 if len(obj.vertices) > 4 else 1     # polygons of 5+ corners become fans
+            labels += [f"objects[{k}]"] * fan
     lights = [k for k, light in enumerate(scene.lights) if isinstance(light, AreaLight)]
     labels += [f"lights[{k}]" for k in lights]
     n_lights = len(lights)
