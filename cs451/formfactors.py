@@ -350,7 +350,14 @@ class HemicubeFormFactors:
         return self.rows(range(self.n))
 
     def cached(self) -> list[int]:
+        """Indices of the rows computed so far."""
         return sorted(self._rows)
+
+    def matches(self, quads: Any) -> bool:
+        """Whether ``quads`` is this object's geometry: then every cached row still holds, whatever the
+        colours, albedos or emission (form factors depend on geometry only), and the object can be reused."""
+        q = np.asarray(quads, dtype=np.float64)
+        return q.shape == self.quads.shape and bool(np.array_equal(q, self.quads))
 
     def views_for(self, i: int, point: np.ndarray | None = None) -> np.ndarray:
         """The five views (H2) of patch i's hemicube, at its centre or at ``point`` on it."""
