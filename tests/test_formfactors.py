@@ -146,6 +146,23 @@ def test11_batching_does_not_change_rows(ref):
     assert np.array_equal(a, b)
 
 
+def test11b_new_colours_reuse_every_row(ref):
+    import json
+
+    from cs451.scene import BUNDLED_DIR, parse_scene
+    data = json.loads((BUNDLED_DIR / "cornell-box.json").read_text())
+    quads, _, emission = scene_polygons(parse_scene(data, "cb"))
+    ff = HemicubeFormFactors(quads, ref, resolution=16)
+    ff.rows([0, 15])
+    data["materials"]["white"]["diffuse"] = [0.2, 0.3, 0.4]
+    data["lights"][0]["radiance"] = [1, 1, 1]
+    quads2, _, emission2 = scene_polygons(parse_scene(data, "cb"))
+    assert not np.array_equal(emission, emission2) and ff.matches(quads2)
+    ff.rows([0, 15])
+    assert ff.counters["hemicubes_rendered"] == 2 and ff.counters["rows_cached_hits"] == 2
+    assert not ff.matches(quads2[:-1]) and not ff.matches(quads2 + 1e-3)
+
+
 def test12_bad_arguments_are_refused(ref):
     q = truth.cube(1)
     with pytest.raises(KitError, match="even"):
