@@ -603,8 +603,11 @@ def formfactor_matrix_raycast(quads: Any, samples: int, seed: int = 0, rows: Ite
     """
     if origin not in ("area", "center"):
         raise KitError(f"origin must be 'area' or 'center', got {origin!r}")
-    import embreex.mesh_construction as mc
-    import embreex.rtcore_scene as rtcs
+    try:
+        import embreex.mesh_construction as mc
+        import embreex.rtcore_scene as rtcs
+    except ImportError:
+        raise KitError("ray casting runs on Embree, an optional peer: pip install -e '.[peers]'") from None
 
     q = as_quads(quads)
     n = len(q)

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import os
 
 import pytest
 
@@ -87,3 +88,12 @@ def test07_results_json_follows_gradescope_and_report_shows_images(reference_gra
     assert "hidden tests" in student and "[hidden]" not in student
     assert "S4.1" in format_table(reference_grade)
     assert to_gradescope(reference_grade)["tests"][0]["status"] == "passed"
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason="the lock-out of reference/ happens only for a root grader")
+def test_grading_the_reference_first_as_root_is_a_self_test(kit_root):
+    """A fresh clone graded as root: the reference must not be locked out of its own folder."""
+    os.chmod(kit_root / "reference", 0o755)
+    result = grade("sphere", "reference", show_progress=False, tasks=["S1"])
+    assert result.score == result.max_score > 0, [r.verdict.message for r in result.results]
+    assert "self-test" in result.isolation and (kit_root / "reference").stat().st_mode & 0o005 == 0o005

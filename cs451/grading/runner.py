@@ -266,6 +266,8 @@ def grade(stage: str, submission: str | Path, include_hidden: bool = True, show_
         out.hidden_not_run = hidden_summary(stage)
     reference = ReferenceAnswers(stage)
     problem = sandbox.isolation_problem(impl_dir)
+    if impl_dir.resolve().is_relative_to((KIT_ROOT / "reference").resolve()):
+        problem = "grading the reference itself, a self-test: the files it would be locked out of are its own"
     drop = sandbox.is_root() and problem is None
     if drop:  # the worker's user must not read the reference, the hidden tests or the cached answers
         sandbox.protect(KIT_ROOT / "reference", KIT_ROOT / "autograder", reference.dir.parent.parent)
