@@ -276,22 +276,35 @@ def plot(results: list[dict], path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, len(results), figsize=(4.2 * len(results), 4), squeeze=False)
+    scenes = list(dict.fromkeys(case["scene"] for case in results))
+    cols = max(sum(case["scene"] == s for case in results) for s in scenes)
+    fig, grid = plt.subplots(len(scenes), cols, figsize=(4.2 * cols, 3.6 * len(scenes)), squeeze=False)
+    axes, used = [], set()
+    for case in results:                            # one row of plots per scene, patch counts left to right
+        row = scenes.index(case["scene"])
+        col = sum(c["scene"] == case["scene"] for c in results[:results.index(case)])
+        axes.append(grid[row][col])
+        used.add((row, col))
+    for r in range(len(scenes)):
+        for c in range(cols):
+            if (r, c) not in used:
+                grid[r][c].axis("off")
     styles = {"direct": ("k", "o"), "jacobi": ("tab:blue", "."), "gauss-seidel": ("tab:green", "."),
               "progressive": ("tab:red", ""), "progressive+ambient": ("tab:orange", ""),
               "progressive+overshoot": ("tab:purple", ""), "progressive+overshoot+ambient": ("tab:pink", "")}
-    for ax, case in zip(axes[0], results):
+    for ax, case in zip(axes, results):
         for label, m in case["methods"].items():
             t = [max(p[0], 1e-3) for p in m["curve"]]
             e = [max(p[1], 1e-6) for p in m["curve"]]
             color, marker = styles.get(label, ("gray", ""))
-            ax.loglog(t, e, color=color, marker=marker, label=label, lw=1.2, ms=4)
+            name = "direct (the truth; drawn at 1e-6)" if label == "direct" else label
+            ax.loglog(t, e, color=color, marker=marker, label=name, lw=1.2, ms=4)
         ax.axhline(1e-2, color="gray", ls=":", lw=0.8)
         ax.set_title(f"{case['scene']}, {case['patches']} patches", fontsize=9)
         ax.set_xlabel("seconds (form factors included)")
         ax.set_ylabel("relative error of B")
         ax.grid(True, which="both", alpha=0.2)
-    axes[0][0].legend(fontsize=6)
+    axes[0].legend(fontsize=6)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
