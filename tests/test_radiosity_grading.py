@@ -1,6 +1,7 @@
 """Stage 4 from the outside: grading (reference 100, starter 0, a broken task loses its points), the CLI, the demo."""
 from __future__ import annotations
 
+import shutil
 import subprocess
 import sys
 
@@ -79,6 +80,15 @@ def test05_demo_writes_frames_and_an_animation(tmp_path):
     # before any shot the furnace shows B = E (left) and the exact answer E/(1 - ρ) with the ambient term (right)
     assert first[:, 48:].mean() > first[:, :48].mean() + 20
     assert np.allclose(last[:, :48], last[:, 48:], atol=2)
+
+
+@pytest.mark.skipif(shutil.which("xvfb-run") is None, reason="needs Xvfb (xvfb-run) for a window without a display")
+def test05b_demo_window_shows_frames_under_xvfb(tmp_path):
+    done = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 1024x768x24", sys.executable, "-m", "cs451", "demo",
+                           "radiosity", "--window", "--frames", "3", "-o", str(tmp_path)],
+                          cwd=KIT_ROOT, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert not list(tmp_path.iterdir()), "a window demo writes no files"
 
 
 @pytest.mark.slow

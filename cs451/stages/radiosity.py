@@ -461,18 +461,20 @@ class GouraudDrawer:
         self.program = self.ctx.program(vertex_shader=VERTEX_SHADER, fragment_shader=FRAGMENT_SHADER)
 
     def draw(self, positions: np.ndarray, colors: np.ndarray, corners: np.ndarray, mvp: np.ndarray,
-             width: int, height: int, background: Any = (0.0, 0.0, 0.0), fbo: Any = None) -> np.ndarray | None:
-        """Draw into ``fbo`` (a window's screen: nothing is read back) or a new float framebuffer (returned)."""
+             width: int, height: int, background: Any = (0.0, 0.0, 0.0), fbo: Any = None,
+             viewport: tuple[int, int, int, int] | None = None) -> np.ndarray | None:
+        """Draw into ``fbo`` (a window's screen, at ``viewport``: nothing is read back) or a new float framebuffer (returned)."""
         ctx = self.ctx
         read = fbo is None
         if read:
             fbo = ctx.framebuffer(color_attachments=[ctx.renderbuffer((width, height), 4, dtype="f4")],
                                   depth_attachment=ctx.depth_renderbuffer((width, height)))
         fbo.use()
-        ctx.viewport = (0, 0, width, height)
+        viewport = viewport or (0, 0, width, height)
+        ctx.viewport = viewport
         ctx.enable(ctx.DEPTH_TEST)
         ctx.disable(ctx.CULL_FACE)                   # both sides of a patch show its radiosity
-        fbo.clear(*background, 1.0, depth=1.0)
+        fbo.clear(*background, 1.0, depth=1.0, viewport=viewport)
         triangles = np.concatenate([corners[:, [0, 1, 2]], corners[:, [0, 2, 3]]]).astype("i4")
         vbo = ctx.buffer(np.hstack([positions, colors]).astype("f4").tobytes())
         ibo = ctx.buffer(triangles.tobytes())
@@ -612,25 +614,33 @@ def _demo(module: Any, output: Path, window: bool, frames: int | None, scene_nam
             positions, colors, corners = vertex_colors(module, patches.quads, patches.parent, values)
             scaled = colors * (opts.exposure / math.pi)
             if gl_window is not None:
-                gl_window.ctx.viewport = (k * width, 0, width, height)
-                drawer.draw(positions, scaled, corners, mvp, width, height, scene.image.background, gl_window.ctx.screen)
+                drawer.draw(positions, scaled, corners, mvp, width, height, scene.image.background, gl_window.ctx.screen,
+                            viewport=(k * width, 0, width, height))
             else:
                 out.append(drawer.draw(positions, scaled, corners, mvp, width, height, scene.image.background))
         return out
 
     def on_shot(shots: int, i: int, B: np.ndarray, dB: np.ndarray) -> None:
-        if shots in wanted:
-            pictures.append(np.hstack(panels(B, dB)) if gl_window is None else gl_window.show(lambda: panels(B, dB)))
-        if gl_window is not None and gl_window.closed:
+        if shots not in wanted:
+            return
+        if gl_window is None:
+            pictures.append(np.hstack(panels(B, dB)))
+            return
+        gl_window.show(lambda: panels(B, dB))
+        if gl_window.closed or (frames and gl_window.frames >= frames):
             raise _StopDemo
 
-    on_shot(0, -1, patches.emission.copy(), patches.emission.copy())
     try:
+        on_shot(0, -1, patches.emission.copy(), patches.emission.copy())
         sol = solve_progressive(module, rows, a, rho, patches.emission, opts.tolerance, opts.max_shots, opts.overshoot,
                                 True, on_shot)
-        on_shot(-1, -1, sol.radiosity, sol.unshot) if gl_window else pictures.append(np.hstack(panels(sol.radiosity, sol.unshot)))
+        if gl_window is None:
+            pictures.append(np.hstack(panels(sol.radiosity, sol.unshot)))
+        else:                                       # the answer stays up until the window is closed
+            while not gl_window.closed and not (frames and gl_window.frames >= frames):
+                gl_window.show(lambda: panels(sol.radiosity, sol.unshot))
     except _StopDemo:
-        return []
+        pass
     finally:
         if gl_window is not None:
             gl_window.close()
@@ -666,17 +676,18 @@ class _DemoWindow:
         self.ctx = moderngl.create_context()
         glfw.set_key_callback(self.win, self._key)
         self.closed = False
+        self.frames = 0
 
     def _key(self, win: Any, key: int, _scancode: int, action: int, _mods: int) -> None:
         if action == self.glfw.PRESS and key in (self.glfw.KEY_Q, self.glfw.KEY_ESCAPE):
             self.closed = True
 
-    def show(self, draw: Callable[[], Any]) -> np.ndarray:
+    def show(self, draw: Callable[[], Any]) -> None:
         draw()
         self.glfw.swap_buffers(self.win)
         self.glfw.poll_events()
-        self.closed = self.closed or self.glfw.window_should_close(self.win)
-        return np.zeros((1, 1, 3))
+        self.frames += 1
+        self.closed = self.closed or bool(self.glfw.window_should_close(self.win))
 
     def close(self) -> None:
         self.glfw.terminate()
