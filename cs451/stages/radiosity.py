@@ -149,7 +149,7 @@ def check_patches(p: Patches, where: str) -> None:
         raise InputError(where, polygon_of(bad), f"negative emission {tuple(p.emission[bad])}: light cannot be absorbed by emitting")
     if (p.reflectance < 0).any() or (p.reflectance > 1).any():
         bad = int(np.flatnonzero(((p.reflectance < 0) | (p.reflectance > 1)).any(axis=1))[0])
-        raise InputError(where, polygon_of(bad), f"reflectance {tuple(p.reflectance[bad])} must lie in [0, 1)")
+        raise InputError(where, polygon_of(bad), f"reflectance {tuple(p.reflectance[bad])} must lie in [0, 1] (1 only where light can escape)")
     scale = float(np.ptp(p.quads.reshape(-1, 3), axis=0).max()) if len(p.quads) else 1.0
     tiny = p.areas <= 1e-12 * scale * scale
     if tiny.any():
@@ -290,7 +290,7 @@ def _validate_system(areas: np.ndarray, reflectance: np.ndarray, emission: np.nd
     if (areas <= 0).any():
         raise KitError(f"radiosity: patch {int(np.argmin(areas))} has zero area")
     if (reflectance < 0).any() or (reflectance > 1).any():
-        raise KitError("radiosity: reflectance must lie in [0, 1)")
+        raise KitError("radiosity: reflectance must lie in [0, 1]")
 
 
 def solve_progressive(impl: Any, rows: Any, areas: np.ndarray, reflectance: np.ndarray, emission: np.ndarray,
