@@ -245,6 +245,15 @@ def test12_albedo_one_in_a_closed_scene_is_refused():
     scene = parse_scene(furnace_variant(diffuse=[1.0, 0.5, 0.5]), "furnace-white")
     with pytest.raises(InputError, match="no solution"):
         R.make_patches(scene, REF, 0.5)
+    # one perfectly white wall among grey ones still has a solution (the others absorb): allowed, and it converges
+    data = furnace_variant()
+    data["materials"]["white"] = {**data["materials"]["wall"], "diffuse": [1.0, 1.0, 1.0]}
+    data["objects"][0]["material"] = "white"
+    quads, rho, E, _ = R.scene_polygons(parse_scene(data, "one-white-wall"))
+    assert R.is_closed(quads) and rho[0].min() == 1.0
+    F = truth.cube_formfactors(patch_normals(quads))
+    sol = R.solve_progressive(REF, R.MatrixRows(F), patch_areas(quads), rho, E, tolerance=1e-6)
+    assert sol.converged and np.allclose(sol.radiosity, truth.direct(F, rho, E), rtol=1e-5)
 
 
 @pytest.mark.parametrize("field,value,message", [
