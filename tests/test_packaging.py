@@ -176,3 +176,16 @@ def test07_workflow_points_add_up_to_the_public_tests(release):
     text = (release / ".github" / "workflows" / "classroom.yml").read_text()
     assert sum(float(p) for p in re.findall(r"max-score: ([\d.]+)", text)) == 60
     assert text.count("_RESULTS:") == 7
+
+
+@pytest.mark.parametrize("stage", ["whitted", "hemicube", "radiosity"])
+def test08_every_stage_releases_without_its_solution(stage, tmp_path):
+    """The packaging is the same for every stage; a later stage ships only the reference it builds on."""
+    from cs451.stages import get_stage
+    out = build_release(stage, tmp_path / "repo")
+    files = {p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()}
+    shipped = {f.split("/")[1] for f in files if f.startswith("reference/")}
+    assert shipped == set(get_stage(stage).builds_on) and stage not in shipped
+    assert not [f for f in files if f.endswith("hidden.py")]
+    assert [f for f in files if f.startswith(f"autograder/{stage}/answers/")]
+    assert f"{stage}/__init__.py" in files and ".github/workflows/classroom.yml" in files
