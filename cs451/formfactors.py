@@ -201,6 +201,11 @@ class ItemBufferRenderer:
         return out.reshape(-1, 4)
 
     def render(self, views: np.ndarray, planes: np.ndarray | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Item buffers of a batch in this renderer's own GL context, whichever context was made current since."""
+        with self.ctx:
+            return self._render(views, planes)
+
+    def _render(self, views: np.ndarray, planes: np.ndarray | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
         """Item buffers of a batch: views (B, 5, 4, 4) world-to-eye -> [(top (r, r), sides (4, r/2, r))] per hemicube.
 
         ``planes`` (B, 4): each shooter's base plane (unit normal, n·centre); geometry not above it

@@ -197,3 +197,17 @@ def test14_hemicube_and_ray_casting_agree_on_the_cornell_box(ref):
     sigma = np.sqrt(np.maximum(rays, 1e-3) / 200_000)
     assert hemi.sum(axis=1) == pytest.approx(rays.sum(axis=1), abs=0.01)
     assert np.abs(hemi - rays).max() < 0.01 and np.median(np.abs(hemi - rays) / sigma) < 3
+
+
+def test_rows_are_right_after_another_gl_context_is_made_current(ref):
+    """A second context (a demo window, another engine) must not redirect the engine's draws and reads."""
+    from cs451.gl import create_context
+    quads, _, _ = scene_polygons(load_scene("cornell-box"))
+    alone = HemicubeFormFactors(quads, ref, resolution=64).row(2)
+    ff = HemicubeFormFactors(quads, ref, resolution=64, batch=1)
+    ff.row(0)                                              # its GL state exists
+    other = create_context()
+    fbo = other.simple_framebuffer((8, 8))
+    fbo.use()
+    fbo.clear(1.0, 0.0, 0.0, 1.0)
+    assert ff.row(2) == pytest.approx(alone, abs=2e-3)     # before the fix: off by 0.2
