@@ -202,8 +202,9 @@ class ItemBufferRenderer:
 
     def render(self, views: np.ndarray, planes: np.ndarray | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
         """Item buffers of a batch in this renderer's own GL context, whichever context was made current since."""
-        with self.ctx:
-            return self._render(views, planes)
+        from .gl import make_current
+        make_current(self.ctx)
+        return self._render(views, planes)
 
     def _render(self, views: np.ndarray, planes: np.ndarray | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
         """Item buffers of a batch: views (B, 5, 4, 4) world-to-eye -> [(top (r, r), sides (4, r/2, r))] per hemicube.

@@ -34,3 +34,13 @@ def renderer_name(ctx: Any) -> str:
     """E.g. 'llvmpipe (LLVM 15.0.6, 256 bits) / Mesa 22.3.6', for reports."""
     info = ctx.info
     return f"{info.get('GL_RENDERER', '?')} / {info.get('GL_VERSION', '?')}"
+
+
+def make_current(ctx: Any) -> None:
+    """Make ``ctx`` the current GL context and leave it so.
+
+    moderngl draws into whichever context is current; a second context (a demo
+    window, another engine) silently takes over. ``with ctx:`` is no answer with
+    EGL: leaving the block makes *no* context current.
+    """
+    ctx.__enter__()
