@@ -49,27 +49,73 @@ def build_bvh(lo: np.ndarray, hi: np.ndarray) -> dict[str, np.ndarray]:
 
 
 # BEGIN SOLUTION
+def _tree(bvh: dict, nsph: int, tri: np.ndarray) -> tuple:
+    """The hierarchy as the kernels read it: four-wide, one 128-byte row per node (two cache lines).
+
+    The binary tree is collapsed: each row takes a binary node's children and opens the largest
+    inner one until it has four. Row q, in 32 words: float32 boxes of its four children as
+    lo x, y, z then hi x, y, z, four of each (rounded outwards; words 0-23), then int32 words 24-27
+    the children's rows (or a leaf's first slot in ``order``) and 28-31: -1 for a row, the leaf's
+    count, or -2 for an empty slot. Row 0 holds only the root. Triangles are copied into slot order.
+    """
+    lo, hi = np.asarray(bvh["lo"], np.float64), np.asarray(bvh["hi"], np.float64)
+    lo32, hi32 = lo.astype(np.float32), hi.astype(np.float32)
+    lo32 = np.where(lo32 > lo, np.nextafter(lo32, np.float32(-np.inf)), lo32)
+    hi32 = np.where(hi32 < hi, np.nextafter(hi32, np.float32(np.inf)), hi32)
+    child = np.asarray(bvh["child"], np.int64).tolist()
+    start = np.asarray(bvh["start"], np.int64)
+    count = np.asarray(bvh["count"], np.int64)
+    ext = hi - lo
+    area = (ext[:, 0] * ext[:, 1] + ext[:, 1] * ext[:, 2] + ext[:, 2] * ext[:, 0]).tolist()
+    kids = [[0]]                 # row 0: the root alone
+    row_of = {}
+    todo = [0] if child[0] >= 0 else []
+    while todo:
+        node = todo.pop()
+        row_of[node] = len(kids)
+        group = [child[node], child[node] + 1]
+        while len(group) < 4:
+            inner = [k for k in group if child[k] >= 0]
+            if not inner:
+                break
+            k = max(inner, key=lambda k: area[k])
+            i = group.index(k)
+            group[i:i + 1] = [child[k], child[k] + 1]
+        kids.append(group)
+        todo.extend(k for k in reversed(group) if child[k] >= 0)
+    raw = np.zeros(len(kids) * 32 + 16, np.int32)  # rows start on 64-byte cache lines
+    skip = (-raw.ctypes.data % 64) // 4
+    ni = raw[skip:skip + len(kids) * 32].reshape(-1, 32)
+    nf = ni.view(np.float32)
+    ni[:, 28:32] = -2
+    nf[:, :24] = np.inf          # an empty slot's box: no ray enters it
+    for q, group in enumerate(kids):
+        for c, k in enumerate(group):
+            nf[q, c:24:4] = np.concatenate([lo32[k], hi32[k]])
+            if child[k] >= 0:
+                ni[q, 24 + c], ni[q, 28 + c] = row_of[k], -1
+            else:
+                ni[q, 24 + c], ni[q, 28 + c] = start[k], count[k]
+    order = np.ascontiguousarray(bvh["order"], np.int64)
+    ltri = np.zeros((len(order), 9))
+    is_tri = order >= nsph
+    ltri[is_tri] = tri[order[is_tri] - nsph]
+    return nf, ni, order, ltri, True
+
+
 def packed(scene: TraceScene) -> dict:
     """The scene's arrays in the layout the compiled kernels read, built once per scene."""
     cached = getattr(scene, "_reference_packed", None)
     if cached is not None:
         return cached
     bvh = scene.bvh
-    one = np.zeros(1, np.int64)
-    if bvh is None:
-        tree = (np.zeros((1, 8), np.float32), one - 1, one, one, one, False)
-    else:
-        # node boxes in float32, rounded outwards, 32 bytes a node: the tree stays in the CPU's cache
-        lo, hi = np.asarray(bvh["lo"], np.float64), np.asarray(bvh["hi"], np.float64)
-        lo32, hi32 = lo.astype(np.float32), hi.astype(np.float32)
-        lo32 = np.where(lo32 > lo, np.nextafter(lo32, np.float32(-np.inf)), lo32)
-        hi32 = np.where(hi32 < hi, np.nextafter(hi32, np.float32(np.inf)), hi32)
-        box = np.zeros((len(lo), 8), np.float32)
-        box[:, :3], box[:, 3:6] = lo32, hi32
-        tree = (box, np.ascontiguousarray(bvh["child"], np.int64), np.ascontiguousarray(bvh["start"], np.int64),
-                np.ascontiguousarray(bvh["count"], np.int64), np.ascontiguousarray(bvh["order"], np.int64), True)
-    sph = np.ascontiguousarray(np.column_stack([scene.sphere_center, scene.sphere_radius]).reshape(-1, 4))
     tri = np.ascontiguousarray(np.concatenate([scene.tri_v0, scene.tri_v1, scene.tri_v2], axis=1).reshape(-1, 9))
+    if bvh is None:
+        ni = np.zeros((1, 32), np.int32)
+        tree = (ni.view(np.float32), ni, np.zeros(1, np.int64), tri, False)
+    else:
+        tree = _tree(bvh, scene.n_spheres, tri)
+    sph = np.ascontiguousarray(np.column_stack([scene.sphere_center, scene.sphere_radius]).reshape(-1, 4))
     planes = np.ascontiguousarray(np.concatenate([scene.plane_point, scene.plane_normal], axis=1).reshape(-1, 6))
     frame = np.ascontiguousarray(np.concatenate([scene.plane_u, scene.plane_v], axis=1).reshape(-1, 6))
     e1, e2 = scene.tri_v1 - scene.tri_v0, scene.tri_v2 - scene.tri_v0

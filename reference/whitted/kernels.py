@@ -14,16 +14,19 @@ import numpy as np
 from numba import njit
 
 _JIT = dict(cache=True, nogil=True, error_model="numpy")
-STACK = 128
+_INLINE = dict(_JIT, inline="always")  # small helpers: no call, no reference counting of their array arguments
+STACK = 256
 
 
-@njit(**_JIT)
-def _sphere_roots(o, d, c, r):
-    fx, fy, fz = o[0] - c[0], o[1] - c[1], o[2] - c[2]
-    a = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
-    b = fx * d[0] + fy * d[1] + fz * d[2]
+@njit(**_INLINE)
+def _sphere_roots(ox, oy, oz, dx, dy, dz, sph, s):
+    """Both roots of the ray o + t d on sphere s (sph[s] = centre, radius), sorted, or (inf, inf)."""
+    r = sph[s, 3]
+    fx, fy, fz = ox - sph[s, 0], oy - sph[s, 1], oz - sph[s, 2]
+    a = dx * dx + dy * dy + dz * dz
+    b = fx * dx + fy * dy + fz * dz
     k = b / a
-    px, py, pz = fx - k * d[0], fy - k * d[1], fz - k * d[2]
+    px, py, pz = fx - k * dx, fy - k * dy, fz - k * dz
     disc = r * r - (px * px + py * py + pz * pz)
     if disc < 0.0:
         return math.inf, math.inf
@@ -37,18 +40,21 @@ def _sphere_roots(o, d, c, r):
     return t0, t1
 
 
-@njit(**_JIT)
-def _triangle(o, kx, ky, kz, sx, sy, sz, tri, i, tmax):
-    """Watertight ray-triangle (Woop et al. 2013); returns t in (0, tmax) or inf."""
-    x0 = tri[i, kx] - o[kx]
-    y0 = tri[i, ky] - o[ky]
-    z0 = tri[i, kz] - o[kz]
-    x1 = tri[i, 3 + kx] - o[kx]
-    y1 = tri[i, 3 + ky] - o[ky]
-    z1 = tri[i, 3 + kz] - o[kz]
-    x2 = tri[i, 6 + kx] - o[kx]
-    y2 = tri[i, 6 + ky] - o[ky]
-    z2 = tri[i, 6 + kz] - o[kz]
+@njit(**_INLINE)
+def _triangle(okx, oky, okz, kx, ky, kz, sx, sy, sz, tri, i, tmax):
+    """Watertight ray-triangle (Woop et al. 2013); returns t in (0, tmax) or inf.
+
+    The origin's coordinates come permuted (okx = o[kx], ...), as ``_shear`` chose the axes.
+    """
+    x0 = tri[i, kx] - okx
+    y0 = tri[i, ky] - oky
+    z0 = tri[i, kz] - okz
+    x1 = tri[i, 3 + kx] - okx
+    y1 = tri[i, 3 + ky] - oky
+    z1 = tri[i, 3 + kz] - okz
+    x2 = tri[i, 6 + kx] - okx
+    y2 = tri[i, 6 + ky] - oky
+    z2 = tri[i, 6 + kz] - okz
     x0 += sx * z0
     y0 += sy * z0
     x1 += sx * z1
@@ -58,7 +64,7 @@ def _triangle(o, kx, ky, kz, sx, sy, sz, tri, i, tmax):
     e0 = x1 * y2 - y1 * x2
     e1 = x2 * y0 - y2 * x0
     e2 = x0 * y1 - y0 * x1
-    if (e0 < 0.0 or e1 < 0.0 or e2 < 0.0) and (e0 > 0.0 or e1 > 0.0 or e2 > 0.0):
+    if ((e0 < 0.0) | (e1 < 0.0) | (e2 < 0.0)) & ((e0 > 0.0) | (e1 > 0.0) | (e2 > 0.0)):  # one branch, not six
         return math.inf
     det = e0 + e1 + e2
     if det == 0.0:
@@ -73,28 +79,12 @@ def _triangle(o, kx, ky, kz, sx, sy, sz, tri, i, tmax):
     return ts / det
 
 
-@njit(**_JIT)
-def _box(box, n, o, inv, tmax):
-    """Entry distance of a ray into node n's box (float32, rounded outwards), or inf."""
-    t0 = 0.0
-    t1 = tmax
-    for a in range(3):
-        ta = (np.float64(box[n, a]) - o[a]) * inv[a]
-        tb = (np.float64(box[n, 3 + a]) - o[a]) * inv[a]
-        if ta > tb:
-            ta, tb = tb, ta
-        if ta > t0:
-            t0 = ta
-        if tb < t1:
-            t1 = tb
-    if t0 <= t1 * 1.0000000000000004:  # slack: a ray grazing a flat box still enters it
-        return t0
-    return math.inf
-
-
-@njit(**_JIT)
-def _shear(d):
-    ax, ay, az = abs(d[0]), abs(d[1]), abs(d[2])
+@njit(**_INLINE)
+def _shear(ox, oy, oz, dx, dy, dz):
+    """The watertight test's axes (kz: the direction's largest), shear and permuted origin."""
+    d = (dx, dy, dz)
+    o = (ox, oy, oz)
+    ax, ay, az = abs(dx), abs(dy), abs(dz)
     kz = 0
     if ay > ax and ay >= az:
         kz = 1
@@ -102,95 +92,181 @@ def _shear(d):
         kz = 2
     kx = (kz + 1) % 3
     ky = (kx + 1) % 3
-    return kx, ky, kz, -d[kx] / d[kz], -d[ky] / d[kz], 1.0 / d[kz]
+    return kx, ky, kz, -d[kx] / d[kz], -d[ky] / d[kz], 1.0 / d[kz], o[kx], o[ky], o[kz]
+
+
+@njit(**_INLINE)
+def _slabs(nf, q, c, ox, oy, oz, ix, iy, iz, tmax):
+    """Entry distance into child c's box of row q (float32, rounded outwards), or inf."""
+    t0 = 0.0
+    t1 = tmax
+    ta = (np.float64(nf[q, c]) - ox) * ix
+    tb = (np.float64(nf[q, 12 + c]) - ox) * ix
+    if ta > tb:
+        ta, tb = tb, ta
+    if ta > t0:
+        t0 = ta
+    if tb < t1:
+        t1 = tb
+    ta = (np.float64(nf[q, 4 + c]) - oy) * iy
+    tb = (np.float64(nf[q, 16 + c]) - oy) * iy
+    if ta > tb:
+        ta, tb = tb, ta
+    if ta > t0:
+        t0 = ta
+    if tb < t1:
+        t1 = tb
+    ta = (np.float64(nf[q, 8 + c]) - oz) * iz
+    tb = (np.float64(nf[q, 20 + c]) - oz) * iz
+    if ta > tb:
+        ta, tb = tb, ta
+    if ta > t0:
+        t0 = ta
+    if tb < t1:
+        t1 = tb
+    if t0 <= t1 * 1.0000000000000004:  # slack: a ray grazing a flat box still enters it
+        return t0
+    return math.inf
+
+
+@njit(**_INLINE)
+def _slabs4(nf, q, ox, oy, oz, ix, iy, iz, tmax, dist):
+    """dist[c] = entry distance into child c's box of row q, or inf (the same test as ``_slabs``, four at once)."""
+    for c in range(4):
+        t0 = 0.0
+        t1 = tmax
+        ta = (np.float64(nf[q, c]) - ox) * ix
+        tb = (np.float64(nf[q, 12 + c]) - ox) * ix
+        lo = tb if ta > tb else ta
+        hi = ta if ta > tb else tb
+        t0 = lo if lo > t0 else t0
+        t1 = hi if hi < t1 else t1
+        ta = (np.float64(nf[q, 4 + c]) - oy) * iy
+        tb = (np.float64(nf[q, 16 + c]) - oy) * iy
+        lo = tb if ta > tb else ta
+        hi = ta if ta > tb else tb
+        t0 = lo if lo > t0 else t0
+        t1 = hi if hi < t1 else t1
+        ta = (np.float64(nf[q, 8 + c]) - oz) * iz
+        tb = (np.float64(nf[q, 20 + c]) - oz) * iz
+        lo = tb if ta > tb else ta
+        hi = ta if ta > tb else tb
+        t0 = lo if lo > t0 else t0
+        t1 = hi if hi < t1 else t1
+        dist[c] = t0 if t0 <= t1 * 1.0000000000000004 else math.inf
+
+
+@njit(**_INLINE)
+def _order(da, ca, db, cb):
+    """Two (distance, slot) pairs, nearer first (on a tie, the lower slot)."""
+    swap = (db < da) | ((db == da) & (cb < ca))  # bitwise: no branches to mispredict
+    return (db if swap else da), (cb if swap else ca), (da if swap else db), (ca if swap else cb)
+
+
+@njit(**_INLINE)
+def _prim_t(ox, oy, oz, dx, dy, dz, okx, oky, okz, kx, ky, kz, sx, sy, sz, k, j, nsph, sph, ltri, tmax):
+    """Distance to primitive k (slot j of the leaf-ordered triangles): a sphere's first root ahead, or inf."""
+    if k < nsph:
+        t0, t1 = _sphere_roots(ox, oy, oz, dx, dy, dz, sph, k)
+        return t0 if t0 > 0.0 else t1
+    return _triangle(okx, oky, okz, kx, ky, kz, sx, sy, sz, ltri, j, tmax)
 
 
 @njit(**_JIT)
-def closest(O, D, box, child, start, count, order, use_bvh, nsph, sph, tri, planes, tri_normal, out_t, out_prim,
+def closest(O, D, nf, ni, order, ltri, use_bvh, nsph, sph, tri, planes, tri_normal, out_t, out_prim,
             out_n, stats):
-    """Closest hit of each ray: t (inf on a miss), primitive number (-1), unit normal; stats[i] = (nodes, tests)."""
+    """Closest hit of each ray: t (inf on a miss), primitive number (-1), unit normal; stats[i] = (nodes, tests).
+
+    The hierarchy is four-wide (see ``bvh._tree``): nf/ni are float32 and int32 views of the same rows;
+    row 0 holds the root alone; ``ltri`` holds the triangles slot by slot (ltri[j] is triangle
+    order[j] - nsph). The stack keeps each waiting child's row (or first slot), kind and entry distance.
+    """
     stack = np.empty(STACK, np.int64)
+    scnt = np.empty(STACK, np.int64)
     snear = np.empty(STACK, np.float64)
-    inv = np.empty(3)
+    dist = np.empty(4)
     nb = nsph + tri.shape[0]
     for i in range(O.shape[0]):
-        o = O[i]
-        d = D[i]
-        for a in range(3):
-            inv[a] = 1.0 / d[a]
-        kx, ky, kz, sx, sy, sz = _shear(d)
+        ox, oy, oz = O[i, 0], O[i, 1], O[i, 2]
+        dx, dy, dz = D[i, 0], D[i, 1], D[i, 2]
+        ix, iy, iz = 1.0 / dx, 1.0 / dy, 1.0 / dz
+        kx, ky, kz, sx, sy, sz, okx, oky, okz = _shear(ox, oy, oz, dx, dy, dz)
         best = math.inf
         prim = -1
         nodes = 0
         tests = 0
         for p in range(planes.shape[0]):
-            dn = d[0] * planes[p, 3] + d[1] * planes[p, 4] + d[2] * planes[p, 5]
+            dn = dx * planes[p, 3] + dy * planes[p, 4] + dz * planes[p, 5]
             tests += 1
             if dn != 0.0:
-                t = ((planes[p, 0] - o[0]) * planes[p, 3] + (planes[p, 1] - o[1]) * planes[p, 4]
-                     + (planes[p, 2] - o[2]) * planes[p, 5]) / dn
+                t = ((planes[p, 0] - ox) * planes[p, 3] + (planes[p, 1] - oy) * planes[p, 4]
+                     + (planes[p, 2] - oz) * planes[p, 5]) / dn
                 if 0.0 < t < best:
                     best = t
                     prim = nb + p
         if use_bvh:
-            nodes += 1
-            if _box(box, 0, o, inv, best) < math.inf:
-                sp = 1
-                stack[0] = 0
-                snear[0] = 0.0
-            else:
-                sp = 0
-        else:
             sp = 0
+            nodes += 1
+            t = _slabs(nf, 0, 0, ox, oy, oz, ix, iy, iz, best)  # row 0 holds the root alone
+            if t < math.inf:
+                stack[0] = ni[0, 24]
+                scnt[0] = ni[0, 28]
+                snear[0] = t
+                sp = 1
+            while sp > 0:
+                sp -= 1
+                if snear[sp] > best:
+                    continue
+                q = stack[sp]
+                cnt = scnt[sp]
+                if cnt >= 0:  # a leaf
+                    for j in range(q, q + cnt):
+                        k = order[j]
+                        tests += 1
+                        t = _prim_t(ox, oy, oz, dx, dy, dz, okx, oky, okz, kx, ky, kz, sx, sy, sz, k, j, nsph, sph, ltri, best)
+                        if 0.0 < t < best:
+                            best = t
+                            prim = k
+                    continue
+                row = np.uint64(q)  # unsigned: no negative-index wraparound on the row's loads
+                _slabs4(nf, row, ox, oy, oz, ix, iy, iz, best, dist)
+                # sort the four children by entry distance (then slot), without branches
+                d0, d1, d2, d3 = dist[0], dist[1], dist[2], dist[3]
+                c0, c1, c2, c3 = 0, 1, 2, 3
+                d0, c0, d1, c1 = _order(d0, c0, d1, c1)
+                d2, c2, d3, c3 = _order(d2, c2, d3, c3)
+                d0, c0, d2, c2 = _order(d0, c0, d2, c2)
+                d1, c1, d3, c3 = _order(d1, c1, d3, c3)
+                d1, c1, d2, c2 = _order(d1, c1, d2, c2)
+                # push far to near: the nearest ends on top; a missed child (inf) is overwritten
+                stack[sp] = ni[row, 24 + c3]
+                scnt[sp] = ni[row, 28 + c3]
+                snear[sp] = d3
+                sp += d3 < math.inf
+                stack[sp] = ni[row, 24 + c2]
+                scnt[sp] = ni[row, 28 + c2]
+                snear[sp] = d2
+                sp += d2 < math.inf
+                stack[sp] = ni[row, 24 + c1]
+                scnt[sp] = ni[row, 28 + c1]
+                snear[sp] = d1
+                sp += d1 < math.inf
+                stack[sp] = ni[row, 24 + c0]
+                scnt[sp] = ni[row, 28 + c0]
+                snear[sp] = d0
+                sp += d0 < math.inf
+                nodes += (ni[row, 28] != -2) + (ni[row, 29] != -2) + (ni[row, 30] != -2) + (ni[row, 31] != -2)
+        else:
             for k in range(nb):
                 tests += 1
                 if k < nsph:
-                    t0, t1 = _sphere_roots(o, d, sph[k, :3], sph[k, 3])
+                    t0, t1 = _sphere_roots(ox, oy, oz, dx, dy, dz, sph, k)
                     t = t0 if t0 > 0.0 else t1
                 else:
-                    t = _triangle(o, kx, ky, kz, sx, sy, sz, tri, k - nsph, best)
+                    t = _triangle(okx, oky, okz, kx, ky, kz, sx, sy, sz, tri, k - nsph, best)
                 if 0.0 < t < best:
                     best = t
                     prim = k
-        while sp > 0:
-            sp -= 1
-            node = stack[sp]
-            if snear[sp] > best:
-                continue
-            c = child[node]
-            if c < 0:
-                for j in range(start[node], start[node] + count[node]):
-                    k = order[j]
-                    tests += 1
-                    if k < nsph:
-                        t0, t1 = _sphere_roots(o, d, sph[k, :3], sph[k, 3])
-                        t = t0 if t0 > 0.0 else t1
-                    else:
-                        t = _triangle(o, kx, ky, kz, sx, sy, sz, tri, k - nsph, best)
-                    if 0.0 < t < best:
-                        best = t
-                        prim = k
-            else:
-                nodes += 2
-                ta = _box(box, c, o, inv, best)
-                tb = _box(box, c + 1, o, inv, best)
-                if ta > tb:
-                    if ta < math.inf:
-                        stack[sp] = c
-                        snear[sp] = ta
-                        sp += 1
-                    stack[sp] = c + 1
-                    snear[sp] = tb
-                    sp += 1
-                else:
-                    if tb < math.inf:
-                        stack[sp] = c + 1
-                        snear[sp] = tb
-                        sp += 1
-                    if ta < math.inf:
-                        stack[sp] = c
-                        snear[sp] = ta
-                        sp += 1
         out_t[i] = best
         out_prim[i] = prim
         if prim < 0:
@@ -198,7 +274,7 @@ def closest(O, D, box, child, start, count, order, use_bvh, nsph, sph, tri, plan
         elif prim < nsph:
             r = sph[prim, 3]
             for a in range(3):
-                out_n[i, a] = (o[a] + best * d[a] - sph[prim, a]) / r
+                out_n[i, a] = (O[i, a] + best * D[i, a] - sph[prim, a]) / r
             length = math.sqrt(out_n[i, 0] ** 2 + out_n[i, 1] ** 2 + out_n[i, 2] ** 2)
             for a in range(3):
                 out_n[i, a] /= length
@@ -241,21 +317,23 @@ def _attenuate(T, k, t, o, d, nb, prim_mat, trans, planes, pframe, checker, chec
 
 
 @njit(**_JIT)
-def transmission(O, D, TMAX, box, child, start, count, order, use_bvh, nsph, sph, tri, planes, pframe,
+def transmission(O, D, TMAX, nf, ni, order, ltri, use_bvh, nsph, sph, tri, planes, pframe,
                  checker, checker_mat, prim_mat, trans, out, stats):
     """Shadow rays: out[i] = product of the transmittances crossed on (0, TMAX[i]); stops at an opaque one."""
     stack = np.empty(STACK, np.int64)
-    inv = np.empty(3)
+    scnt = np.empty(STACK, np.int64)
     T = np.empty(3)
     nb = nsph + tri.shape[0]
     for i in range(O.shape[0]):
         o = O[i]
         d = D[i]
         tmax = TMAX[i]
+        ox, oy, oz = O[i, 0], O[i, 1], O[i, 2]
+        dx, dy, dz = D[i, 0], D[i, 1], D[i, 2]
+        ix, iy, iz = 1.0 / dx, 1.0 / dy, 1.0 / dz
         for a in range(3):
-            inv[a] = 1.0 / d[a]
             T[a] = 1.0
-        kx, ky, kz, sx, sy, sz = _shear(d)
+        kx, ky, kz, sx, sy, sz, okx, oky, okz = _shear(ox, oy, oz, dx, dy, dz)
         nodes = 0
         tests = 0
         blocked = False
@@ -272,15 +350,14 @@ def transmission(O, D, TMAX, box, child, start, count, order, use_bvh, nsph, sph
         sp = 0
         if not blocked:
             if use_bvh:
-                nodes += 1
-                if _box(box, 0, o, inv, tmax) < math.inf:
-                    stack[0] = 0
-                    sp = 1
+                stack[0] = 0
+                scnt[0] = -1
+                sp = 1
             else:
                 for k in range(nb):
                     tests += 1
                     if k < nsph:
-                        t0, t1 = _sphere_roots(o, d, sph[k, :3], sph[k, 3])
+                        t0, t1 = _sphere_roots(ox, oy, oz, dx, dy, dz, sph, k)
                         if 0.0 < t0 < tmax and _attenuate(T, k, t0, o, d, nb, prim_mat, trans, planes, pframe, checker, checker_mat):
                             blocked = True
                             break
@@ -288,20 +365,20 @@ def transmission(O, D, TMAX, box, child, start, count, order, use_bvh, nsph, sph
                             blocked = True
                             break
                     else:
-                        t = _triangle(o, kx, ky, kz, sx, sy, sz, tri, k - nsph, tmax)
+                        t = _triangle(okx, oky, okz, kx, ky, kz, sx, sy, sz, tri, k - nsph, tmax)
                         if t < tmax and _attenuate(T, k, t, o, d, nb, prim_mat, trans, planes, pframe, checker, checker_mat):
                             blocked = True
                             break
         while sp > 0 and not blocked:
             sp -= 1
-            node = stack[sp]
-            c = child[node]
-            if c < 0:
-                for j in range(start[node], start[node] + count[node]):
+            q = stack[sp]
+            cnt = scnt[sp]
+            if cnt >= 0:
+                for j in range(q, q + cnt):
                     k = order[j]
                     tests += 1
                     if k < nsph:
-                        t0, t1 = _sphere_roots(o, d, sph[k, :3], sph[k, 3])
+                        t0, t1 = _sphere_roots(ox, oy, oz, dx, dy, dz, sph, k)
                         if 0.0 < t0 < tmax and _attenuate(T, k, t0, o, d, nb, prim_mat, trans, planes, pframe, checker, checker_mat):
                             blocked = True
                             break
@@ -309,18 +386,20 @@ def transmission(O, D, TMAX, box, child, start, count, order, use_bvh, nsph, sph
                             blocked = True
                             break
                     else:
-                        t = _triangle(o, kx, ky, kz, sx, sy, sz, tri, k - nsph, tmax)
+                        t = _triangle(okx, oky, okz, kx, ky, kz, sx, sy, sz, ltri, j, tmax)
                         if t < tmax and _attenuate(T, k, t, o, d, nb, prim_mat, trans, planes, pframe, checker, checker_mat):
                             blocked = True
                             break
             else:
-                nodes += 2
-                if _box(box, c, o, inv, tmax) < math.inf:
-                    stack[sp] = c
-                    sp += 1
-                if _box(box, c + 1, o, inv, tmax) < math.inf:
-                    stack[sp] = c + 1
-                    sp += 1
+                for c in range(4):
+                    kc = ni[q, 28 + c]
+                    if kc == -2:
+                        break
+                    nodes += 1
+                    if _slabs(nf, q, c, ox, oy, oz, ix, iy, iz, tmax) < math.inf:
+                        stack[sp] = ni[q, 24 + c]
+                        scnt[sp] = kc
+                        sp += 1
         for a in range(3):
             out[i, a] = 0.0 if blocked else T[a]
         stats[i, 0] = nodes
