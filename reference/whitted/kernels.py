@@ -130,30 +130,39 @@ def _slabs(nf, q, c, ox, oy, oz, ix, iy, iz, tmax):
 
 
 @njit(**_INLINE)
+def _axis(nf, q, col, o, inv, t0, t1):
+    """Clip (t0, t1) to one axis's slab of a child's box: near and far planes in nf[q, col], nf[q, col + 12]."""
+    ta = (np.float64(nf[q, col]) - o) * inv
+    tb = (np.float64(nf[q, col + 12]) - o) * inv
+    lo = tb if ta > tb else ta
+    hi = ta if ta > tb else tb
+    return (lo if lo > t0 else t0), (hi if hi < t1 else t1)
+
+
+@njit(**_INLINE)
 def _slabs4(nf, q, ox, oy, oz, ix, iy, iz, tmax, dist):
-    """dist[c] = entry distance into child c's box of row q, or inf (the same test as ``_slabs``, four at once)."""
-    for c in range(4):
-        t0 = 0.0
-        t1 = tmax
-        ta = (np.float64(nf[q, c]) - ox) * ix
-        tb = (np.float64(nf[q, 12 + c]) - ox) * ix
-        lo = tb if ta > tb else ta
-        hi = ta if ta > tb else tb
-        t0 = lo if lo > t0 else t0
-        t1 = hi if hi < t1 else t1
-        ta = (np.float64(nf[q, 4 + c]) - oy) * iy
-        tb = (np.float64(nf[q, 16 + c]) - oy) * iy
-        lo = tb if ta > tb else ta
-        hi = ta if ta > tb else tb
-        t0 = lo if lo > t0 else t0
-        t1 = hi if hi < t1 else t1
-        ta = (np.float64(nf[q, 8 + c]) - oz) * iz
-        tb = (np.float64(nf[q, 20 + c]) - oz) * iz
-        lo = tb if ta > tb else ta
-        hi = ta if ta > tb else tb
-        t0 = lo if lo > t0 else t0
-        t1 = hi if hi < t1 else t1
-        dist[c] = t0 if t0 <= t1 * 1.0000000000000004 else math.inf
+    """dist[c] = entry distance into child c's box of row q, or inf: ``_slabs`` for the four children.
+
+    Written out lane by lane (straight-line, the same operations on columns c = 0..3) so that LLVM's
+    SLP vectoriser can test the four boxes at once (see ``_compiled``).
+    """
+    n0, f0 = _axis(nf, q, 0, ox, ix, 0.0, tmax)
+    n1, f1 = _axis(nf, q, 1, ox, ix, 0.0, tmax)
+    n2, f2 = _axis(nf, q, 2, ox, ix, 0.0, tmax)
+    n3, f3 = _axis(nf, q, 3, ox, ix, 0.0, tmax)
+    n0, f0 = _axis(nf, q, 4, oy, iy, n0, f0)
+    n1, f1 = _axis(nf, q, 5, oy, iy, n1, f1)
+    n2, f2 = _axis(nf, q, 6, oy, iy, n2, f2)
+    n3, f3 = _axis(nf, q, 7, oy, iy, n3, f3)
+    n0, f0 = _axis(nf, q, 8, oz, iz, n0, f0)
+    n1, f1 = _axis(nf, q, 9, oz, iz, n1, f1)
+    n2, f2 = _axis(nf, q, 10, oz, iz, n2, f2)
+    n3, f3 = _axis(nf, q, 11, oz, iz, n3, f3)
+    slack = 1.0000000000000004  # a ray grazing a flat box still enters it
+    dist[0] = n0 if n0 <= f0 * slack else math.inf
+    dist[1] = n1 if n1 <= f1 * slack else math.inf
+    dist[2] = n2 if n2 <= f2 * slack else math.inf
+    dist[3] = n3 if n3 <= f3 * slack else math.inf
 
 
 @njit(**_INLINE)
@@ -213,12 +222,17 @@ def closest(O, D, nf, ni, order, ltri, use_bvh, nsph, sph, tri, planes, tri_norm
                 scnt[0] = ni[0, 28]
                 snear[0] = t
                 sp = 1
-            while sp > 0:
-                sp -= 1
-                if snear[sp] > best:
-                    continue
-                q = stack[sp]
-                cnt = scnt[sp]
+            q = 0
+            cnt = 0
+            go = False  # True: (q, cnt) is the next node, taken without a trip through the stack
+            while go or sp > 0:
+                if not go:
+                    sp -= 1
+                    if snear[sp] > best:
+                        continue
+                    q = stack[sp]
+                    cnt = scnt[sp]
+                go = False
                 if cnt >= 0:  # a leaf
                     for j in range(q, q + cnt):
                         k = order[j]
@@ -238,7 +252,8 @@ def closest(O, D, nf, ni, order, ltri, use_bvh, nsph, sph, tri, planes, tri_norm
                 d0, c0, d2, c2 = _order(d0, c0, d2, c2)
                 d1, c1, d3, c3 = _order(d1, c1, d3, c3)
                 d1, c1, d2, c2 = _order(d1, c1, d2, c2)
-                # push far to near: the nearest ends on top; a missed child (inf) is overwritten
+                nodes += (ni[row, 28] != -2) + (ni[row, 29] != -2) + (ni[row, 30] != -2) + (ni[row, 31] != -2)
+                # the others wait on the stack, far to near; a missed child (inf) is overwritten
                 stack[sp] = ni[row, 24 + c3]
                 scnt[sp] = ni[row, 28 + c3]
                 snear[sp] = d3
@@ -251,11 +266,10 @@ def closest(O, D, nf, ni, order, ltri, use_bvh, nsph, sph, tri, planes, tri_norm
                 scnt[sp] = ni[row, 28 + c1]
                 snear[sp] = d1
                 sp += d1 < math.inf
-                stack[sp] = ni[row, 24 + c0]
-                scnt[sp] = ni[row, 28 + c0]
-                snear[sp] = d0
-                sp += d0 < math.inf
-                nodes += (ni[row, 28] != -2) + (ni[row, 29] != -2) + (ni[row, 30] != -2) + (ni[row, 31] != -2)
+                if d0 < math.inf:  # the nearest child is next
+                    q = ni[row, 24 + c0]
+                    cnt = ni[row, 28 + c0]
+                    go = True
         else:
             for k in range(nb):
                 tests += 1
@@ -515,8 +529,28 @@ def build(lo, hi, leaf_size):
     return nlo[:m].copy(), nhi[:m].copy(), child[:m].copy(), start[:m].copy(), count[:m].copy(), order
 
 
+def _compiled(kernel, args: tuple) -> None:
+    """Compile (or load from numba's cache) kernel for these arguments with LLVM's SLP vectoriser on.
+
+    Numba leaves it off by default; it lets ``_slabs4`` test four boxes in a few vector instructions.
+    The switch is numba's own config value, set only while this compiles (results are the same either way).
+    """
+    from numba import typeof
+    from numba.core import config
+    sig = tuple(typeof(a) for a in args)
+    if sig in kernel.overloads:
+        return
+    old = config.SLP_VECTORIZE
+    config.SLP_VECTORIZE = 1
+    try:
+        kernel.compile(sig)
+    finally:
+        config.SLP_VECTORIZE = old
+
+
 def in_threads(kernel, n: int, row_args: tuple, shared: tuple, outs: tuple, threads: int = 2) -> None:
     """Run ``kernel(*rows, *shared, *outs)`` over chunks of n rays in threads (the kernels release the GIL)."""
+    _compiled(kernel, (*row_args, *shared, *outs))
     if n < 4096 or threads <= 1:
         kernel(*row_args, *shared, *outs)
         return
