@@ -31,24 +31,22 @@ CORNELL = json.loads((BUNDLED_DIR / "cornell-box.json").read_text())
 CORNELL_QUADS = scene_polygons(parse_scene(CORNELL, "cornell-box"))[0].tolist()
 
 
-def tables_test(name, points, resolution, hidden=False) -> Test:
-    def top(out, params):
-        got, want = np.asarray(out["top"]), truth.delta_top(params["resolution"])
+def _table_matches(key, closed_form):
+    """A sub-check: the table ``key`` equals its closed form cell by cell, else the first bad cell."""
+    def check(out, params):
+        got, want = np.asarray(out[key]), closed_form(params["resolution"])
         if got.shape != want.shape:
             return f"shape {got.shape}, expected {want.shape}"
         if not np.allclose(got, want, rtol=1e-9, atol=1e-15):
             k = np.unravel_index(np.argmax(np.abs(got - want)), want.shape)
             return f"cell [row {k[0]}, column {k[1]}] is {got[k]:.6g}, expected {want[k]:.6g}"
         return None
+    return check
 
-    def side(out, params):
-        got, want = np.asarray(out["side"]), truth.delta_side(params["resolution"])
-        if got.shape != want.shape:
-            return f"shape {got.shape}, expected {want.shape}"
-        if not np.allclose(got, want, rtol=1e-9, atol=1e-15):
-            k = np.unravel_index(np.argmax(np.abs(got - want)), want.shape)
-            return f"cell [row {k[0]}, column {k[1]}] is {got[k]:.6g}, expected {want[k]:.6g}"
-        return None
+
+def tables_test(name, points, resolution, hidden=False) -> Test:
+    top = _table_matches("top", truth.delta_top)
+    side = _table_matches("side", truth.delta_side)
 
     def closure(out, params):
         total = float(np.sum(out["top"]) + 4 * np.sum(out["side"]))
