@@ -58,7 +58,6 @@ def render_report(result: GradeResult, show_hidden: bool = True) -> str:
     """The report as HTML; with ``show_hidden=False`` hidden tests are counted, not shown (the student's view)."""
     esc = html.escape
     shown = [r for r in result.results if show_hidden or not r.test.hidden]
-    hidden = [r for r in result.results if r.test.hidden and not show_hidden]
     score = sum(r.score for r in shown)
     total = sum(r.test.points for r in shown)
     parts = [f"<!doctype html><meta charset=utf-8><title>cs451 {esc(result.stage)}: {score:g}/{total:g}</title>",

@@ -6,7 +6,8 @@ from pathlib import Path
 
 from .. import KIT_ROOT
 
-LITTER = shutil.ignore_patterns("__pycache__", "*.pyc", ".pytest_cache", "*.egg-info", ".cs451-cache", "*.png~")
+LITTER_PATTERNS = ("__pycache__", "*.pyc", ".pytest_cache", "*.egg-info", ".cs451-cache")
+LITTER = shutil.ignore_patterns(*LITTER_PATTERNS)
 
 
 def copy_tree(rel: str, dest_root: Path, ignore=LITTER) -> Path:

@@ -17,11 +17,11 @@ import time
 import zipfile
 from pathlib import Path
 
-from .. import KIT_ROOT, __version__
+from .. import __version__
 from ..errors import KitError
 from ..grading.runner import load_tests
 from ..stages import get_stage
-from .files import LITTER, copy_tree, write_executable
+from .files import LITTER, LITTER_PATTERNS, copy_tree, write_executable
 
 #: Seconds the whole grading may take inside Gradescope's default 10-minute limit (the rest: start-up and margin).
 GRADESCOPE_BUDGET = 480.0
@@ -68,7 +68,7 @@ def build_gradescope(stage: str, output: str | Path) -> Path:
     with tempfile.TemporaryDirectory(prefix="cs451-gradescope-") as tmp:
         root = Path(tmp)
         for rel in ("cs451", "reference", "autograder", "pyproject.toml", "README.md"):
-            copy_tree(rel, root, ignore=shutil.ignore_patterns(*_litter_patterns(), "answers"))
+            copy_tree(rel, root, ignore=shutil.ignore_patterns(*LITTER_PATTERNS, "answers"))
         write_executable(root / "setup.sh", SETUP_SH.format(stage=stage, version=__version__))
         write_executable(root / "run_autograder", RUN_AUTOGRADER.format(stage=stage))
         manifest = {"stage": stage, "title": st.title, "kit_version": __version__,
@@ -84,10 +84,6 @@ def build_gradescope(stage: str, output: str | Path) -> Path:
                     info.compress_type = zipfile.ZIP_DEFLATED
                     zf.writestr(info, path.read_bytes())
     return output
-
-
-def _litter_patterns() -> tuple[str, ...]:
-    return ("__pycache__", "*.pyc", ".pytest_cache", "*.egg-info", ".cs451-cache")
 
 
 def stage_submission(submission: Path, stage: str) -> Path:
