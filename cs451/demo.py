@@ -26,17 +26,19 @@ def has_display() -> bool:
 def run_demo(*, stage: str = "sphere", impl: str = "reference", output: str | Path = "demo",
              window: bool | None = None, frames: int | None = None) -> list[Path]:
     """Open the window (``window=None``: when there is a display) or write the demo's images to ``output``."""
+    st = get_stage(stage)
+    if st.demo is None:
+        raise KitError(f"no demo for stage {stage!r} yet")
     show_window = window if window is not None else has_display()
-    if stage != "sphere":
-        st = get_stage(stage)
-        if st.demo is None:
-            raise KitError(f"no demo for stage {stage!r} yet")
-        return st.demo(load_impl(resolve_impl(impl, stage), stage), Path(output), show_window, frames)
-    module = load_impl(resolve_impl(impl, stage), stage)
-    if show_window:
+    return st.demo(load_impl(resolve_impl(impl, stage), stage), Path(output), show_window, frames)
+
+
+def sphere_demo(module: Any, folder: Path, window: bool, frames: int | None) -> list[Path]:
+    """Stage 1's demo: the window, or three images where there is no display."""
+    if window:
         _sphere_window(module, frames)
         return []
-    return _sphere_images(module, Path(output))
+    return _sphere_images(module, folder)
 
 
 def _sphere_images(module: Any, folder: Path) -> list[Path]:

@@ -9,6 +9,7 @@ through :data:`STAGE`, or replaced by trusted inputs ``given`` by the autograder
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
@@ -293,8 +294,15 @@ def probe_render(impl: Any, scene: dict, size: list[int], shading: str | None = 
     return {"image": render(sc, impl, tuple(size), shading=shading, given=given)}  # type: ignore[arg-type]
 
 
+def demo(module: Any, output: Path, window: bool, frames: int | None) -> list[Path]:
+    """The original program's window, or its images without a display (:mod:`cs451.demo`)."""
+    from ..demo import sphere_demo  # GLFW and the window loop load only for a demo
+    return sphere_demo(module, output, window, frames)
+
+
 STAGE = Stage(
     name="sphere", number=1, title="The lit sphere", handout="01-sphere", tasks=TASKS, render=render,
     probes={"perspective": probe_perspective, "look_at": probe_look_at, "sphere_mesh": probe_sphere_mesh,
             "reshape": probe_reshape, "handle_key": probe_handle_key, "parts": probe_parts, "render": probe_render},
+    demo=demo,
 )
