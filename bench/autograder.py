@@ -16,11 +16,10 @@ import sys
 import tempfile
 import threading
 import time
-import zipfile
 from pathlib import Path
 
 from cs451 import KIT_ROOT
-from cs451.packaging.gradescope import GRADESCOPE_BUDGET, build_gradescope
+from cs451.packaging.gradescope import GRADESCOPE_BUDGET, build_gradescope, simulated_env, unpack_like_gradescope
 from cs451.stages import stage_names
 
 GRADESCOPE_MEMORY_MB = 768
@@ -67,26 +66,12 @@ def _run_measured(args: list[str], env: dict) -> tuple[float, float, int]:
     return time.perf_counter() - start, peak, code
 
 
-def _layout(stage: str, top: Path) -> Path:
-    root = top / "autograder"
-    (root / "source").mkdir(parents=True)
-    with zipfile.ZipFile(build_gradescope(stage, top / "autograder.zip")) as zf:
-        zf.extractall(root / "source")
-    for script in ("setup.sh", "run_autograder"):
-        (root / "source" / script).chmod(0o755)
-    for path in [top, root, *root.rglob("*")]:
-        if path.is_dir():
-            path.chmod(0o755)
-    return root
-
-
 def measure(stage: str) -> list[dict]:
     top = Path(tempfile.mkdtemp(prefix=f"cs451-bench-{stage}-"))
     os.chmod(top, 0o755)
     try:
-        root = _layout(stage, top)
-        env = {**os.environ, "AUTOGRADER_ROOT": str(root), "CS451_HOME": str(root / "source"),
-               "CS451_PYTHON": sys.executable}
+        root = unpack_like_gradescope(build_gradescope(stage, top / "autograder.zip"), top)
+        env = simulated_env(root, sys.executable)
         t0 = time.perf_counter()
         subprocess.run([sys.executable, "-m", "cs451", "autograder", "warm", stage], cwd=root / "source",
                        check=True, capture_output=True)

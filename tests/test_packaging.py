@@ -14,13 +14,12 @@ import shutil
 import subprocess
 import sys
 import tempfile
-import zipfile
 from pathlib import Path
 
 import pytest
 
 from cs451 import KIT_ROOT
-from cs451.packaging.gradescope import build_gradescope
+from cs451.packaging.gradescope import build_gradescope, simulated_env, unpack_like_gradescope
 from cs451.packaging.release import build_release
 
 STAGE = "sphere"
@@ -38,16 +37,7 @@ def gradescope(request) -> Path:
     """An unpacked autograder in a Gradescope-like layout, its reference answers warmed as setup.sh does."""
     top = world_readable_dir("cs451-gs-")
     request.addfinalizer(lambda: shutil.rmtree(top, ignore_errors=True))
-    root = top / "autograder"
-    (root / "source").mkdir(parents=True)
-    zip_path = build_gradescope(STAGE, top / "autograder.zip")
-    with zipfile.ZipFile(zip_path) as zf:
-        zf.extractall(root / "source")
-    for script in ("setup.sh", "run_autograder"):
-        (root / "source" / script).chmod(0o755)
-    for path in [root, *root.rglob("*")]:
-        if path.is_dir():
-            path.chmod(0o755)
+    root = unpack_like_gradescope(build_gradescope(STAGE, top / "autograder.zip"), top)
     subprocess.run([sys.executable, "-m", "cs451", "autograder", "warm", STAGE], cwd=root / "source",
                    check=True, capture_output=True)
     return root
@@ -60,9 +50,7 @@ def run_autograder(root: Path, files: dict[str, Path] | Path | None) -> dict:
         (root / sub).mkdir()
     if isinstance(files, Path):
         shutil.copytree(files, root / "submission", dirs_exist_ok=True)
-    env = {**os.environ, "AUTOGRADER_ROOT": str(root), "CS451_HOME": str(root / "source"),
-           "CS451_PYTHON": sys.executable}
-    done = subprocess.run([str(root / "source" / "run_autograder")], env=env, capture_output=True, text=True,
+    done = subprocess.run([str(root / "source" / "run_autograder")], env=simulated_env(root, sys.executable), capture_output=True, text=True,
                           timeout=600)
     assert done.returncode == 0, done.stderr
     return json.loads((root / "results" / "results.json").read_text())

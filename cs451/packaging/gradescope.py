@@ -121,3 +121,27 @@ def run_gradescope(stage: str, submission: str | Path, results: str | Path,
         raise
     write_results(results, result)
     return 0
+
+
+def unpack_like_gradescope(zip_path: Path, top: Path) -> Path:
+    """Unpack an autograder zip into ``top/autograder/source`` as Gradescope does; returns ``top/autograder``.
+
+    For the kit's tests and benchmarks, which run ``run_autograder`` outside Gradescope.
+    Folders are made world-readable, as the unprivileged worker must enter them.
+    """
+    root = top / "autograder"
+    (root / "source").mkdir(parents=True, exist_ok=True)
+    with zipfile.ZipFile(zip_path) as zf:
+        zf.extractall(root / "source")
+    for script in ("setup.sh", "run_autograder"):
+        (root / "source" / script).chmod(0o755)
+    for path in [top, root, *root.rglob("*")]:
+        if path.is_dir():
+            path.chmod(0o755)
+    return root
+
+
+def simulated_env(root: Path, python: str) -> dict[str, str]:
+    """The environment that points ``run_autograder`` at an unpacked layout and an installed Python."""
+    return {**os.environ, "AUTOGRADER_ROOT": str(root), "CS451_HOME": str(root / "source"), "CS451_PYTHON": python}
+
