@@ -36,6 +36,8 @@ CASES = {False: [("cornell-box", [140.0, 100.0, 70.0, 50.0]), ("room", [0.5, 0.3
 VARIANTS = [("progressive", False, 1.0), ("progressive+ambient", True, 1.0),
             ("progressive+overshoot", False, 1.5), ("progressive+overshoot+ambient", True, 1.5)]
 TARGETS = (1e-1, 1e-2, 1e-3)
+#: (scene, patch sizes) shot to 2 × 2 elements each, for the full and the quick run
+SUBSTRUCTURED = {False: [("cornell-box", [100.0, 70.0]), ("room", [0.5])], True: [("cornell-box", [140.0])]}
 
 
 def relative_error(shown: np.ndarray, truth: np.ndarray, areas: np.ndarray, mask: np.ndarray) -> float:
@@ -84,6 +86,9 @@ def run_case(ref: Any, scene_name: str, patch_size: float, resolution: int) -> d
                            "formfactor_seconds_per_lazy_row": lazy_seconds, "formfactor_seconds_per_row": row_seconds,
                            "methods": {}}
     out["methods"]["direct"] = {"curve": [(ff_seconds + direct_seconds, 0.0, n)], "rows": n}
+    # how well the truth itself is known: the same system on independently rotated hemicubes
+    other = R.hemicube_formfactors(patches.quads, resolution, opts.proximity, seed=1).matrix()
+    out["formfactor_noise"] = relative_error(R.solve_direct(R.shooting_matrix(other, a), rho, E), truth, a, mask)
 
     for method in ("jacobi", "gauss-seidel"):
         curve: list[tuple[float, float, int]] = [(ff_seconds, relative_error(E, truth, a, mask), n)]
@@ -125,6 +130,60 @@ def run_case(ref: Any, scene_name: str, patch_size: float, resolution: int) -> d
     for m in out["methods"].values():
         for target in TARGETS:
             m[f"seconds_to_{target:g}"], m[f"rows_to_{target:g}"] = first_below(m["curve"], target)
+    return out
+
+
+# --- substructuring: patches shoot, elements receive -------------------------------------------
+
+def run_substructured(ref: Any, scene_name: str, patch_size: float, resolution: int, k: int = 2) -> dict:
+    """Progressive refinement with patches shooting to k × k elements each, against the elements' full system.
+
+    The full-matrix methods on the elements need one row per element; substructured shooting
+    needs at most one per patch (k² fewer), at the price of shooting each patch's mean unshot
+    radiosity from its centre. Its error is measured against the direct solve of the element
+    system (the answer the full-matrix methods give), with the same price per row.
+    """
+    from cs451.patches import patch_areas
+    from cs451 import substructuring as S
+
+    scene = load_scene(scene_name)
+    patches = R.make_patches(scene, ref, patch_size)
+    elements, parent = S.split_patches(patches.quads, k)
+    a = patch_areas(elements)
+    rho, E = patches.reflectance[parent], patches.emission[parent]
+    mask = E.max(axis=1) == 0
+    engine = R.hemicube_formfactors(elements, resolution, "none")
+    start = time.perf_counter()
+    F = engine.matrix()
+    row_seconds = (time.perf_counter() - start) / len(elements)
+    truth = R.solve_direct(R.shooting_matrix(F, a), rho, E)
+    rows = S.PatchToElementRows(engine, patches.quads, parent)
+    curves: dict[str, list] = {}
+    for label, use_ambient in (("substructured", False), ("substructured+ambient", True)):
+        curve: list[tuple[float, float, int]] = []
+        shooters: set[int] = set()
+        excluded = [0.0]
+        begin = time.perf_counter()
+
+        def on_shot(shots: int, p: int, B: np.ndarray, dB: np.ndarray) -> None:
+            t0 = time.perf_counter()
+            shooters.add(p)
+            shown = B + rho * R.ambient(ref, a, rho, dB) if use_ambient else B
+            curve.append((t0 - begin - excluded[0] + len(shooters) * row_seconds,
+                          relative_error(shown, truth, a, mask), len(shooters)))
+            excluded[0] += time.perf_counter() - t0
+
+        S.solve_substructured(rows, parent, a, rho, E, tolerance=1e-5, on_shot=on_shot)
+        curves[label] = curve
+    out: dict[str, Any] = {"scene": scene_name, "patch_size": patch_size, "patches": len(patches),
+                           "elements": len(elements), "resolution": resolution, "row_seconds": row_seconds,
+                           "element_matrix_seconds": row_seconds * len(elements), "methods": {}}
+    for label, curve in curves.items():
+        m: dict[str, Any] = {"curve": curve, "rows": curve[-1][2] if curve else 0,
+                             "final_error": curve[-1][1] if curve else None}
+        for target in TARGETS:
+            m[f"seconds_to_{target:g}"], m[f"rows_to_{target:g}"] = first_below(curve, target)
+        out["methods"][label] = m
     return out
 
 
@@ -267,6 +326,22 @@ def print_table(results: list[dict]) -> list[str]:
         lines.append(f"{'':<21}form factors: {1e3 * case['formfactor_seconds_per_row']:.2f} ms a row charged to every "
                      f"method (all rows batched {case['formfactor_seconds_all_rows_batched']:.2f} s, "
                      f"one row alone {1e3 * case['formfactor_seconds_per_lazy_row']:.2f} ms)")
+        lines.append(f"{'':<21}the truth's own uncertainty: independently rotated hemicubes give a solution "
+                     f"{100 * case['formfactor_noise']:.2f}% away")
+    print("\n".join(lines))
+    return lines
+
+
+def print_substructured(results: list[dict]) -> list[str]:
+    head = "".join(f"  rows/s to {t:g}".rjust(19) for t in TARGETS[:2])
+    lines = ["", "substructuring: patches shoot to 2 × 2 elements; error against the elements' direct solve",
+             f"{'scene':<12} {'patches':>7} {'elements':>8}  {'method':<24}{head}  {'final error':>11}  "
+             f"{'element matrix (rows/s)':>23}", "-" * 120]
+    for case in results:
+        for label, m in case["methods"].items():
+            cells = "".join(f"{str(m[f'rows_to_{t:g}'] or '—'):>10} /{_fmt(m[f'seconds_to_{t:g}']):>7}" for t in TARGETS[:2])
+            lines.append(f"{case['scene']:<12} {case['patches']:>7} {case['elements']:>8}  {label:<24}{cells}  "
+                         f"{100 * m['final_error']:>10.2f}%  {case['elements']:>14} /{case['element_matrix_seconds']:>7.2f}")
     print("\n".join(lines))
     return lines
 
@@ -319,9 +394,12 @@ def main(output: Path, quick: bool = False) -> None:
             results.append(run_case(ref, scene_name, patch_size, resolution=64 if quick else 128))
             print(f"  {scene_name} at {patch_size}: {results[-1]['patches']} patches done", flush=True)
     table = print_table(results)
+    substructured = [run_substructured(ref, scene_name, size, resolution=64 if quick else 128)
+                     for scene_name, sizes in SUBSTRUCTURED[quick] for size in sizes]
+    table += print_substructured(substructured)
     furnace = furnace_figures(ref, quick)
     peer = compare_with_mitsuba(ref, quick)
-    report: dict[str, Any] = {"cases": results, "table": table, "furnace": furnace}
+    report: dict[str, Any] = {"cases": results, "substructured": substructured, "table": table, "furnace": furnace}
     if peer is not None:
         from cs451.imageio import save_png
 

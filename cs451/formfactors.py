@@ -380,32 +380,52 @@ class HemicubeFormFactors:
         areas = patch_areas(sub)
         return patch_centers(sub), areas / areas.sum()
 
-    def _compute(self, batch: list[int]) -> None:
-        t_render = t_sum = 0.0
-        jobs = [(i, p, w) for i in batch for p, w in zip(*self.shooter_points(i))]
-        rows = {i: np.zeros(self.n) for i in batch}
+    def rows_at(self, points: Any, normals: Any, lift: Any = 0.0) -> np.ndarray:
+        """Rows (k, n) for shooters that are not among the receivers: one hemicube at each point.
+
+        For substructuring, where a patch shoots to the finer elements it is made of: the
+        hemicube stands at the patch's centre, facing its normal, and sees the receivers
+        (``quads``). ``lift`` (k,) raises each base plane, so that the shooter's own elements,
+        which lie in (or, on a slightly warped quad, a hair above) that plane, are not drawn.
+        Not cached, and not counted as rows of this matrix.
+        """
+        points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        normals = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
+        lift = np.broadcast_to(np.asarray(lift, dtype=np.float64), (len(points),))
+        normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+        jobs = [(k, points[k], normals[k], float(normals[k] @ points[k] + lift[k]), k, 1.0) for k in range(len(points))]
+        return self._render_rows(jobs, len(points))
+
+    def _render_rows(self, jobs: list, count: int) -> np.ndarray:
+        """Sum hemicube rows: jobs are (row, eye, normal, plane offset, up-vector seed index, weight)."""
+        rows = np.zeros((count, self.n))
         top_w, side_w = self.tables
         step = self.renderer.batch
         for start in range(0, len(jobs), step):
             chunk = jobs[start:start + step]
             t0 = time.perf_counter()
-            views = np.stack([self.views_for(i, p) for i, p, _ in chunk])
-            planes = np.array([[*self.normals[i], self.normals[i] @ self.centers[i]] for i, _, _ in chunk])
+            views = np.stack([H.call_views(self.impl, eye, n, hemicube_up(n, seed, self.rotate, self.seed))
+                              for _, eye, n, _, seed, _ in chunk])
+            planes = np.array([[*n, d] for _, _, n, d, _, _ in chunk])
             buffers = self.renderer.render(views, planes)     # the base plane from the geometry, not from H2
             t1 = time.perf_counter()
             self.counters["readbacks"] += 1
             self.counters["hemicubes_rendered"] += len(chunk)
-            for (i, _, w), (top, sides) in zip(chunk, buffers):
-                rows[i] += w * H.call_row(self.impl, top, sides, top_w, side_w, self.n)
-            t_render += t1 - t0
-            t_sum += time.perf_counter() - t1
+            for (k, _, _, _, _, w), (top, sides) in zip(chunk, buffers):
+                rows[k] += w * H.call_row(self.impl, top, sides, top_w, side_w, self.n)
+            self.seconds["render"] += t1 - t0
+            self.seconds["sum"] += time.perf_counter() - t1
+        return rows
+
+    def _compute(self, batch: list[int]) -> None:
+        jobs = [(k, p, self.normals[i], float(self.normals[i] @ self.centers[i]), i, w)
+                for k, i in enumerate(batch) for p, w in zip(*self.shooter_points(i))]
+        rows = self._render_rows(jobs, len(batch))
         t2 = time.perf_counter()
-        for i in batch:
+        for k, i in enumerate(batch):
             self._count_culled(i)
-            self._rows[i] = self._proximity_fix(i, rows[i]) if self.proximity == "contour" else rows[i]
+            self._rows[i] = self._proximity_fix(i, rows[k]) if self.proximity == "contour" else rows[k]
             self.counters["rows_computed"] += 1
-        self.seconds["render"] += t_render
-        self.seconds["sum"] += t_sum
         self.seconds["proximity"] += time.perf_counter() - t2
 
     def _count_culled(self, i: int) -> None:
@@ -622,7 +642,6 @@ def formfactor_matrix_raycast(quads: Any, samples: int, seed: int = 0, rows: Ite
     scene = rtcs.EmbreeScene()
     mc.TriangleMesh(scene, tris.astype(np.float32))
     normals, centers = patch_normals(q), patch_centers(q)
-    radii = np.linalg.norm(q - centers[:, None, :], axis=2).max(axis=1)
     rng = np.random.default_rng(seed)
     out = np.zeros((len(rows), n))
     chunk = max(1, 2_000_000 // max(samples, 1))

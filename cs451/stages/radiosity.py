@@ -238,19 +238,20 @@ class MatrixRows:
 
 
 def hemicube_formfactors(quads: np.ndarray, resolution: int = 128, proximity: str = "contour", ctx: Any = None,
-                         batch: int = 256) -> Any:
+                         batch: int = 256, seed: int = 0) -> Any:
     """Stage 3's trusted hemicube engine over the reference hemicube implementation (lazy, cached rows).
 
     Pass the GL context you draw with as ``ctx`` when you draw while rows are still being computed
     (the demo): the engine renders into whichever context is current. ``batch`` hemicubes share a
     read-back: 1 suits rows asked for one at a time (shooting), the default suits whole matrices.
+    ``seed`` picks the hemicubes' random rotations (another seed: an independent estimate of F).
     """
     from ..formfactors import HemicubeFormFactors
     from ..impl import load_impl, resolve_impl
 
     impl = load_impl(resolve_impl("reference", "hemicube"), "hemicube")
     return HemicubeFormFactors(quads, impl, resolution=resolution, proximity=proximity, ctx=ctx,
-                               batch=batch)
+                               batch=batch, seed=seed)
 
 
 @dataclass

@@ -1,0 +1,111 @@
+"""Substructuring: patches shoot, finer elements receive (Cohen, Greenberg, Immel & Brock 1986).
+
+The 1988 progressive-refinement paper pairs shooting with this two-level hierarchy: each
+patch is split into k × k elements; a patch's hemicube, at its centre, sees the elements,
+so a row holds patch-to-element form factors F_pe. Rows then number the patches, not the
+elements, while the radiosity is resolved on the elements. The price is an approximation:
+a patch shoots its area-averaged unshot radiosity, from its centre, as if it were uniform.
+
+This is engine code for the benchmark (``cs451 bench radiosity``), which measures what that
+approximation costs in accuracy against what it saves in rows; it is not a student task.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+from .errors import KitError
+from .patches import as_quads, patch_centers, patch_normals, subdivide_uniform
+
+
+class PatchToElementRows:
+    """Rows F_p· over the elements for shooting patch p: one hemicube at the patch centre, lazily, cached.
+
+    ``engine`` is a :class:`cs451.formfactors.HemicubeFormFactors` over the elements (the
+    receivers); ``parent[e]`` is the patch element e belongs to.
+    """
+
+    def __init__(self, engine: Any, patches: Any, parent: np.ndarray):
+        self.engine = engine
+        self.patches = as_quads(patches)
+        self.parent = np.asarray(parent)
+        self.centers = patch_centers(self.patches)
+        self.normals = patch_normals(self.patches)
+        # the patch's own elements must not be seen: raise the base plane above every one of their corners
+        own = np.einsum("mkd,md->mk", engine.quads - self.centers[self.parent][:, None, :], self.normals[self.parent])
+        self.lift = np.zeros(len(self.patches))
+        np.maximum.at(self.lift, self.parent, own.max(axis=1))
+        self._rows: dict[int, np.ndarray] = {}
+        self.counters = {"hemicubes_rendered": 0, "rows_computed": 0, "rows_cached_hits": 0}
+
+    def row(self, p: int) -> np.ndarray:
+        if p in self._rows:
+            self.counters["rows_cached_hits"] += 1
+        else:
+            self._rows[p] = self.engine.rows_at(self.centers[p], self.normals[p], self.lift[p])[0]
+            self.counters["rows_computed"] += 1
+            self.counters["hemicubes_rendered"] += 1
+        return self._rows[p]
+
+
+@dataclass
+class SubstructuredSolution:
+    """Element radiosities, what is still unshot (per element) and the cost."""
+    radiosity: np.ndarray                     # (m, 3) B of the elements
+    unshot: np.ndarray                        # (m, 3) ΔB of the elements
+    converged: bool
+    residual: float                           # unshot energy / emitted energy
+    shots: int
+    seconds: float
+    order: list[int] = field(default_factory=list)
+
+
+def split_patches(patches: Any, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each patch into k × k elements: (elements (n·k², 4, 3), parent (n·k²,))."""
+    if int(k) != k or k < 1:
+        raise KitError(f"elements per patch side must be a positive integer, got {k}")
+    return subdivide_uniform(patches, int(k))
+
+
+def solve_substructured(rows: Any, parent: np.ndarray, element_areas: np.ndarray, reflectance: np.ndarray,
+                        emission: np.ndarray, tolerance: float = 1e-3, max_shots: int = 0,
+                        on_shot: Callable[[int, int, np.ndarray, np.ndarray], None] | None = None
+                        ) -> SubstructuredSolution:
+    """Progressive refinement with patches shooting to elements.
+
+    A patch's unshot energy is the sum of its elements' (ΔB_e·A_e). The patch with the most
+    shoots its mean unshot radiosity ΔB_p: every element e receives ρ_e·ΔB_p·F_pe·A_p/A_e, into
+    B_e and ΔB_e; the shooter's elements' ΔB become 0. Stops when the unshot energy is at most
+    ``tolerance`` of the emitted energy, or after ``max_shots``.
+    """
+    parent = np.asarray(parent)
+    a = np.asarray(element_areas, dtype=np.float64)
+    n_patches = int(parent.max()) + 1
+    patch_area = np.bincount(parent, weights=a, minlength=n_patches)
+    B = np.array(emission, dtype=np.float64)
+    dB = B.copy()
+    emitted = float((np.abs(B).sum(axis=1) * a).sum())
+    max_shots = max_shots or 1000 * n_patches
+    members = [np.flatnonzero(parent == p) for p in range(n_patches)]
+    energy = np.zeros((n_patches, 3))
+    np.add.at(energy, parent, dB * a[:, None])
+    order: list[int] = []
+    start = time.perf_counter()
+    while len(order) < max_shots and np.abs(energy).sum() > tolerance * emitted:
+        p = int(np.argmax(np.abs(energy).sum(axis=1)))
+        shot = energy[p] / patch_area[p]
+        dB[members[p]] = 0.0
+        energy[p] = 0.0
+        received = reflectance * (rows.row(p) * (patch_area[p] / a))[:, None] * shot[None, :]
+        B += received
+        dB += received
+        np.add.at(energy, parent, received * a[:, None])
+        order.append(p)
+        if on_shot is not None:
+            on_shot(len(order), p, B, dB)
+    residual = float(np.abs(energy).sum() / emitted) if emitted > 0 else 0.0
+    return SubstructuredSolution(B, dB, residual <= tolerance * (1 + 1e-9), residual, len(order),
+                                 time.perf_counter() - start, order)
