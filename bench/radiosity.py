@@ -375,6 +375,9 @@ def plot(results: list[dict], path: Path) -> None:
             name = "direct (the truth; drawn at 1e-6)" if label == "direct" else label
             ax.loglog(t, e, color=color, marker=marker, label=name, lw=1.2, ms=4)
         ax.axhline(1e-2, color="gray", ls=":", lw=0.8)
+        if "formfactor_noise" in case:               # below this, the error is finer than the form factors are known
+            ax.axhline(case["formfactor_noise"], color="gray", ls="--", lw=0.8,
+                       label="the truth's own uncertainty (other hemicube rotations)")
         ax.set_title(f"{case['scene']}, {case['patches']} patches", fontsize=9)
         ax.set_xlabel("seconds (form factors included)")
         ax.set_ylabel("relative error of B")

@@ -119,3 +119,7 @@ def test07_bench_writes_its_table_json_and_plot(tmp_path):
         assert all(m["seconds_to_0.001"] is not None for m in case["methods"].values()), case["scene"]
     exact = [f for f in report["furnace"] if f["form_factors"].startswith("exact")]
     assert all(abs(f["mean_error"]) <= 1e-4 for f in exact)
+    assert all(0 < case["formfactor_noise"] < 0.1 for case in report["cases"])
+    for case in report["substructured"]:               # a row per patch at most, fewer than the elements
+        for m in case["methods"].values():
+            assert 0 < m["rows"] <= case["patches"] < case["elements"] and m["final_error"] < 0.1
