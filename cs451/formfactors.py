@@ -380,20 +380,23 @@ class HemicubeFormFactors:
         areas = patch_areas(sub)
         return patch_centers(sub), areas / areas.sum()
 
-    def rows_at(self, points: Any, normals: Any, lift: Any = 0.0) -> np.ndarray:
+    def rows_at(self, points: Any, normals: Any, lift: Any = 0.0, ids: Any = None) -> np.ndarray:
         """Rows (k, n) for shooters that are not among the receivers: one hemicube at each point.
 
         For substructuring, where a patch shoots to the finer elements it is made of: the
         hemicube stands at the patch's centre, facing its normal, and sees the receivers
         (``quads``). ``lift`` (k,) raises each base plane, so that the shooter's own elements,
         which lie in (or, on a slightly warped quad, a hair above) that plane, are not drawn.
-        Not cached, and not counted as rows of this matrix.
+        ``ids`` (k,) pick each hemicube's seeded rotation (default 0 .. k-1): give every shooter
+        its own, or their aliasing lines up. Not cached, and not counted as rows of this matrix.
         """
         points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         normals = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
         lift = np.broadcast_to(np.asarray(lift, dtype=np.float64), (len(points),))
         normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
-        jobs = [(k, points[k], normals[k], float(normals[k] @ points[k] + lift[k]), k, 1.0) for k in range(len(points))]
+        ids = range(len(points)) if ids is None else [int(i) for i in np.ravel(ids)]
+        jobs = [(k, points[k], normals[k], float(normals[k] @ points[k] + lift[k]), i, 1.0)
+                for k, i in zip(range(len(points)), ids)]
         return self._render_rows(jobs, len(points))
 
     def _render_rows(self, jobs: list, count: int) -> np.ndarray:

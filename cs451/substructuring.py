@@ -45,7 +45,7 @@ class PatchToElementRows:
         if p in self._rows:
             self.counters["rows_cached_hits"] += 1
         else:
-            self._rows[p] = self.engine.rows_at(self.centers[p], self.normals[p], self.lift[p])[0]
+            self._rows[p] = self.engine.rows_at(self.centers[p], self.normals[p], self.lift[p], ids=[p])[0]
             self.counters["rows_computed"] += 1
             self.counters["hemicubes_rendered"] += 1
         return self._rows[p]

@@ -33,10 +33,11 @@ def test01_one_element_per_patch_is_plain_progressive_refinement():
 
 def test02_patch_centred_row_is_the_engines_own_row_at_that_place():
     patches = R.make_patches(load_scene("cornell-box"), REF, 140.0)
-    engine = HemicubeFormFactors(patches.quads, HEMICUBE, resolution=32, rotate=False, proximity="none")
-    for i in (0, 40, 100):
-        got = engine.rows_at(engine.centers[i], engine.normals[i])[0]
-        assert np.array_equal(got, engine.row(i))
+    for rotate in (False, True):
+        engine = HemicubeFormFactors(patches.quads, HEMICUBE, resolution=32, rotate=rotate, proximity="none")
+        for i in (0, 40, 100):
+            got = engine.rows_at(engine.centers[i], engine.normals[i], ids=[i])[0]
+            assert np.array_equal(got, engine.row(i))
 
 
 @pytest.fixture(scope="module")
