@@ -32,6 +32,8 @@ class PatchToElementRows:
         self.engine = engine
         self.patches = as_quads(patches)
         self.parent = np.asarray(parent)
+        if self.parent.shape != (engine.n,) or self.parent.min() < 0 or self.parent.max() >= len(self.patches):
+            raise KitError(f"parent must give each of the {engine.n} elements a patch in 0 .. {len(self.patches) - 1}")
         self.centers = patch_centers(self.patches)
         self.normals = patch_normals(self.patches)
         # the patch's own elements must not be seen: raise the base plane above every one of their corners
@@ -90,8 +92,7 @@ def solve_substructured(rows: Any, parent: np.ndarray, element_areas: np.ndarray
     emitted = float((np.abs(B).sum(axis=1) * a).sum())
     max_shots = max_shots or 1000 * n_patches
     members = [np.flatnonzero(parent == p) for p in range(n_patches)]
-    energy = np.zeros((n_patches, 3))
-    np.add.at(energy, parent, dB * a[:, None])
+    energy = np.stack([np.bincount(parent, weights=dB[:, c] * a, minlength=n_patches) for c in range(3)], axis=1)
     order: list[int] = []
     start = time.perf_counter()
     while len(order) < max_shots and np.abs(energy).sum() > tolerance * emitted:
@@ -102,7 +103,8 @@ def solve_substructured(rows: Any, parent: np.ndarray, element_areas: np.ndarray
         received = reflectance * (rows.row(p) * (patch_area[p] / a))[:, None] * shot[None, :]
         B += received
         dB += received
-        np.add.at(energy, parent, received * a[:, None])
+        for c in range(3):                          # the elements' new unshot energy, summed per patch
+            energy[:, c] += np.bincount(parent, weights=received[:, c] * a, minlength=n_patches)
         order.append(p)
         if on_shot is not None:
             on_shot(len(order), p, B, dB)

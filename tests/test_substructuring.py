@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from cs451 import substructuring as S
+from cs451.errors import KitError
 from cs451.formfactors import HemicubeFormFactors
 from cs451.impl import load_impl, resolve_impl
 from cs451.patches import patch_areas, subdivide_uniform
@@ -84,5 +85,7 @@ def test04_cornell_box_substructured_approaches_the_element_solution_with_a_row_
     lit = E.max(axis=1) == 0
     error = (np.abs(sol.radiosity - truth)[lit] * a[lit, None]).sum() / (truth[lit] * a[lit, None]).sum()
     assert error < 0.10
-    with pytest.raises(Exception, match="positive integer"):
+    with pytest.raises(KitError, match="positive integer"):
         S.split_patches(patches.quads, 0)
+    with pytest.raises(KitError, match="each of the"):
+        S.PatchToElementRows(engine, patches.quads, parent[:-1])
