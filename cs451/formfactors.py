@@ -367,9 +367,11 @@ class HemicubeFormFactors:
 
     def views_for(self, i: int, point: np.ndarray | None = None) -> np.ndarray:
         """The five views (H2) of patch i's hemicube, at its centre or at ``point`` on it."""
-        n = self.normals[i]
-        at = self.centers[i] if point is None else point
-        return H.call_views(self.impl, at, n, hemicube_up(n, i, self.rotate, self.seed))
+        return self._views(self.centers[i] if point is None else point, self.normals[i], i)
+
+    def _views(self, eye: np.ndarray, normal: np.ndarray, index: int) -> np.ndarray:
+        """The five views (H2) of a hemicube at ``eye`` facing ``normal``, turned by hemicube ``index``'s seeded rotation."""
+        return H.call_views(self.impl, eye, normal, hemicube_up(normal, index, self.rotate, self.seed))
 
     def shooter_points(self, i: int) -> tuple[np.ndarray, np.ndarray]:
         """Where patch i's hemicubes stand: its centre, or with ``shooter_split`` k the centres of its k × k
@@ -395,20 +397,18 @@ class HemicubeFormFactors:
         lift = np.broadcast_to(np.asarray(lift, dtype=np.float64), (len(points),))
         normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
         ids = range(len(points)) if ids is None else [int(i) for i in np.ravel(ids)]
-        jobs = [(k, points[k], normals[k], float(normals[k] @ points[k] + lift[k]), i, 1.0)
-                for k, i in zip(range(len(points)), ids)]
+        jobs = [(k, points[k], normals[k], float(normals[k] @ points[k] + lift[k]), i, 1.0) for k, i in enumerate(ids)]
         return self._render_rows(jobs, len(points))
 
     def _render_rows(self, jobs: list, count: int) -> np.ndarray:
-        """Sum hemicube rows: jobs are (row, eye, normal, plane offset, up-vector seed index, weight)."""
+        """Sum hemicube rows: jobs are (row, eye, normal, plane offset, rotation index, weight)."""
         rows = np.zeros((count, self.n))
         top_w, side_w = self.tables
         step = self.renderer.batch
         for start in range(0, len(jobs), step):
             chunk = jobs[start:start + step]
             t0 = time.perf_counter()
-            views = np.stack([H.call_views(self.impl, eye, n, hemicube_up(n, seed, self.rotate, self.seed))
-                              for _, eye, n, _, seed, _ in chunk])
+            views = np.stack([self._views(eye, n, index) for _, eye, n, _, index, _ in chunk])
             planes = np.array([[*n, d] for _, _, n, d, _, _ in chunk])
             buffers = self.renderer.render(views, planes)     # the base plane from the geometry, not from H2
             t1 = time.perf_counter()
