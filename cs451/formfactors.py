@@ -72,6 +72,7 @@ void main() {
 }
 """
 MAX_ATLAS = 4096      # pixels on a side of the item-buffer atlas
+BLIND_ROW_SUM = 0.05  # a row summing to less sees (almost) nothing: with resample_blind, look again from over the patch
 PROXIMITY_GAUSS = 5   # Gauss-Legendre points per side of the shooter for close pairs (C-14, 1 × 0.5 to 1 × 2: 0.07%)
 
 
@@ -93,9 +94,16 @@ def hemicube_up(normal: np.ndarray, index: int, rotate: bool, seed: int) -> np.n
 
 
 def default_near_far(quads: np.ndarray) -> tuple[float, float]:
-    """Near = 1e-5 of the scene's diagonal (closer geometry is clipped away: the near-plane error), far = 2 diagonals."""
+    """Near = 1e-3 of the scene's diagonal, far = 2 diagonals.
+
+    Geometry closer than ``near`` is clipped away (the near-plane error), so near wants to be
+    small; but a 24-bit depth buffer resolves depths about z²/(near·2²⁴) apart, so near must not
+    be too small either. At 1e-5 of the diagonal, the Cornell box's light, 0.1 mm below the
+    ceiling, lost the depth test to the ceiling behind it from every floor patch (F to the
+    light came out 0). At 1e-3, surfaces 0.06 mm apart a diagonal away are still told apart.
+    """
     diag = float(np.linalg.norm(np.ptp(quads.reshape(-1, 3), axis=0)))
-    return 1e-5 * diag, 2.0 * diag
+    return 1e-3 * diag, 2.0 * diag
 
 
 def hemicube_inputs(quads: np.ndarray, impl: Any, patch: int, rotate: bool = False, seed: int = 0,
@@ -260,7 +268,7 @@ class HemicubeFormFactors:
     """Rows of the form-factor matrix of ``quads`` by hemicubes, lazily, cached, many hemicubes per read-back.
 
     Parameters: ``impl`` a loaded stage-3 implementation; ``resolution`` cells across the
-    top face (even); ``near`` the near plane (default 1e-5 of the scene's diagonal);
+    top face (even); ``near`` the near plane (default 1e-3 of the scene's diagonal);
     ``rotate`` a seeded random rotation of each hemicube about its normal (breaks
     aliasing between the cells and regular geometry); ``proximity`` "contour" (exact
     point-to-polygon form factors averaged over the shooter for close pairs, H6) or
@@ -269,19 +277,24 @@ class HemicubeFormFactors:
     ``batch`` hemicubes per read-back (capped by the atlas size); ``shooter_split`` k renders
     k × k hemicubes per row, at the centres of the shooter's k × k sub-quads, and averages
     their rows by area (the other answer to the proximity error, and to occluders close to
-    the shooter, at k² the cost).
+    the shooter, at k² the cost). ``resample_blind`` k (0: off): a row that sees almost
+    nothing from the patch centre (sum under ``BLIND_ROW_SUM``) is looked at again from the
+    centres of k × k sub-quads, and the rows of those that see are averaged by area. A patch
+    whose centre lies under a box resting on it (a floor patch straddling a block's footprint)
+    is lit on its exposed part, and that part must shoot its light; from the centre alone the
+    light would vanish.
 
     ``counters``: hemicubes_rendered (k² per row with a split shooter), rows_computed,
     rows_cached_hits (rows asked for again), patches_culled (summed over rows: patches wholly
     in or behind the shooter's plane, which the base-plane clip discards), patches_backfacing
     (in front of the plane but facing away: drawn, they hide what is behind them, receive 0),
-    proximity_pairs (close pairs the contour fix replaced), readbacks (one per batch).
+    proximity_pairs (close pairs the contour fix replaced), blind_rows_resampled, readbacks (one per batch).
     ``seconds``: render (draw and read back), sum (H5), proximity (the fix).
     """
 
     def __init__(self, quads: Any, impl: Any, resolution: int = 128, near: float | None = None, rotate: bool = True,
                  seed: int = 0, proximity: str = "contour", batch: int = 256, proximity_distance: float = 2.0,
-                 shooter_split: int = 1, ctx: Any = None):
+                 shooter_split: int = 1, resample_blind: int = 0, ctx: Any = None):
         self.quads = as_quads(quads)
         if len(self.quads) == 0:
             raise KitError("no patches")
@@ -297,6 +310,9 @@ class HemicubeFormFactors:
         if int(shooter_split) != shooter_split or shooter_split < 1:
             raise KitError(f"shooter_split must be a positive integer, got {shooter_split}")
         self.shooter_split = int(shooter_split)
+        if int(resample_blind) != resample_blind or resample_blind < 0:
+            raise KitError(f"resample_blind must be a non-negative integer, got {resample_blind}")
+        self.resample_blind = int(resample_blind)
         self.normals = patch_normals(self.quads)
         self.areas = patch_areas(self.quads)
         self.centers = patch_centers(self.quads)
@@ -311,7 +327,7 @@ class HemicubeFormFactors:
         self._tables: tuple[np.ndarray, np.ndarray] | None = None
         self._rows: dict[int, np.ndarray] = {}
         self.counters = {"hemicubes_rendered": 0, "rows_computed": 0, "rows_cached_hits": 0, "patches_culled": 0,
-                         "patches_backfacing": 0, "proximity_pairs": 0, "readbacks": 0}
+                         "patches_backfacing": 0, "proximity_pairs": 0, "blind_rows_resampled": 0, "readbacks": 0}
         self.seconds = {"render": 0.0, "sum": 0.0, "proximity": 0.0}
 
     # -- lazily built GPU state ------------------------------------------------
@@ -373,12 +389,13 @@ class HemicubeFormFactors:
         """The five views (H2) of a hemicube at ``eye`` facing ``normal``, turned by hemicube ``index``'s seeded rotation."""
         return H.call_views(self.impl, eye, normal, hemicube_up(normal, index, self.rotate, self.seed))
 
-    def shooter_points(self, i: int) -> tuple[np.ndarray, np.ndarray]:
-        """Where patch i's hemicubes stand: its centre, or with ``shooter_split`` k the centres of its k × k
-        bilinear sub-quads, with their area weights (summing to 1)."""
-        if self.shooter_split == 1:
+    def shooter_points(self, i: int, split: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Where patch i's hemicubes stand: its centre, or with ``shooter_split`` k (or ``split``) the centres of
+        its k × k bilinear sub-quads, with their area weights (summing to 1)."""
+        split = self.shooter_split if split is None else split
+        if split == 1:
             return self.centers[i][None], np.ones(1)
-        sub, _ = subdivide_uniform(self.quads[i][None], self.shooter_split)
+        sub, _ = subdivide_uniform(self.quads[i][None], split)
         areas = patch_areas(sub)
         return patch_centers(sub), areas / areas.sum()
 
@@ -424,12 +441,39 @@ class HemicubeFormFactors:
         jobs = [(k, p, self.normals[i], float(self.normals[i] @ self.centers[i]), i, w)
                 for k, i in enumerate(batch) for p, w in zip(*self.shooter_points(i))]
         rows = self._render_rows(jobs, len(batch))
+        if self.resample_blind:
+            blind = [k for k, i in enumerate(batch) if rows[k].sum() < BLIND_ROW_SUM]
+            if blind:
+                again = self._resampled_rows([batch[k] for k in blind])
+                for k, row in zip(blind, again):
+                    if not np.isnan(row).any():
+                        rows[k] = row
         t2 = time.perf_counter()
         for k, i in enumerate(batch):
             self._count_culled(i)
             self._rows[i] = self._proximity_fix(i, rows[k]) if self.proximity == "contour" else rows[k]
             self.counters["rows_computed"] += 1
         self.seconds["proximity"] += time.perf_counter() - t2
+
+    def _resampled_rows(self, patches: list[int]) -> np.ndarray:
+        """Rows of patches blind from their centres: the area-weighted mean over the sub-quad centres that see."""
+        points = [self.shooter_points(i, self.resample_blind) for i in patches]
+        stands = [(i, p) for i, (ps, _) in zip(patches, points) for p in ps]
+        jobs = [(k, p, self.normals[i], float(self.normals[i] @ self.centers[i]), i, 1.0) for k, (i, p) in enumerate(stands)]
+        sub = self._render_rows(jobs, len(jobs))
+        out = np.zeros((len(patches), self.n))
+        start = 0
+        for k, (ps, weights) in enumerate(points):
+            rows = sub[start:start + len(ps)]
+            start += len(ps)
+            sums = rows.sum(axis=1)
+            if sums.max() < BLIND_ROW_SUM:
+                out[k] = np.nan                   # blind from everywhere (it faces an opening): keep the centre's row
+                continue
+            seeing = sums >= 0.5 * sums.max()
+            out[k] = weights[seeing] @ rows[seeing] / weights[seeing].sum()
+        self.counters["blind_rows_resampled"] += len(patches)
+        return out
 
     def _count_culled(self, i: int) -> None:
         heights = (self.quads - self.centers[i]) @ self.normals[i]                  # (n, 4)

@@ -211,3 +211,52 @@ def test_rows_are_right_after_another_gl_context_is_made_current(ref):
     fbo.use()
     fbo.clear(1.0, 0.0, 0.0, 1.0)
     assert ff.row(2) == pytest.approx(alone, abs=2e-3)     # before the fix: off by 0.2
+
+
+def cornell_patches(size: float) -> tuple[np.ndarray, np.ndarray]:
+    """The Cornell box's polygons subdivided by the reference R1: (patches, parent polygon)."""
+    from cs451.stages import radiosity as R
+    quads, _, _ = scene_polygons(load_scene("cornell-box"))
+    return R.subdivide(load_impl(resolve_impl("reference", "radiosity"), "radiosity"), quads, size)
+
+
+def test15_the_floor_sees_the_light_not_the_ceiling_behind_it(ref):
+    """The light hangs 0.1 mm below the ceiling: the near plane must leave the depth buffer enough precision."""
+    patches, parent = cornell_patches(50.0)
+    light, ceiling = parent == 15, parent == 1
+    q = patches
+    behind = ceiling & (q[:, :, 0].min(1) >= 213) & (q[:, :, 0].max(1) <= 343) & (q[:, :, 2].min(1) >= 227) \
+        & (q[:, :, 2].max(1) <= 332)
+    assert behind.sum() == 4
+    ff = HemicubeFormFactors(patches, ref, resolution=64, proximity="none")
+    rows = ff.rows(np.flatnonzero(parent == 0)[::7])
+    open_view = rows.sum(axis=1) > 0.5                          # not under a block
+    assert open_view.sum() >= 10
+    assert rows[:, behind].sum() == 0.0
+    sees_light = rows[open_view][:, light].sum(axis=1) > 0.002
+    assert sees_light.mean() > 0.7                              # all but those in a block's shadow
+    # the cause: with the near plane at 1e-5 of the diagonal the ceiling wins the depth test everywhere
+    tiny = HemicubeFormFactors(patches, ref, resolution=64, proximity="none", near=1e-5 * ff.far / 2)
+    old = tiny.rows(np.flatnonzero(parent == 0)[::7])
+    assert old[:, light].sum() == 0.0 and old[:, behind].sum() > 0.05
+
+
+def test16_a_patch_blind_from_its_centre_shoots_from_the_part_that_sees(ref):
+    """A floor patch whose centre lies under a block is lit on its exposed part; that part must shoot."""
+    patches, parent = cornell_patches(140.0)
+    plain = HemicubeFormFactors(patches, ref, resolution=32, proximity="none")
+    light_row = plain.row(int(np.flatnonzero(parent == 15)[0]))
+    floor = np.flatnonzero(parent == 0)
+    sums = plain.rows(floor).sum(axis=1)
+    blind_but_lit = floor[(sums < 0.05) & (light_row[floor] > 0)]
+    assert len(blind_but_lit), "the scene no longer has a lit floor patch with its centre under a block"
+    again = HemicubeFormFactors(patches, ref, resolution=32, proximity="none", resample_blind=3)
+    fixed = again.rows(blind_but_lit)
+    assert (fixed.sum(axis=1) > 0.5).all()
+    assert again.counters["blind_rows_resampled"] == len(blind_but_lit)
+    assert again.counters["hemicubes_rendered"] == len(blind_but_lit) * (1 + 9)
+    # a row that sees little from everywhere (a block face toward the box's open front) keeps its centre's row
+    open_front = np.flatnonzero(parent == 14)
+    assert np.array_equal(again.rows(open_front), plain.rows(open_front))
+    with pytest.raises(KitError, match="resample_blind"):
+        HemicubeFormFactors(patches, ref, resample_blind=-1)

@@ -212,7 +212,8 @@ def test10_rows_only_for_shooters_and_none_for_a_new_light_colour():
     first = R.solve_progressive(REF, rows, patches.areas, patches.reflectance, patches.emission, 1e-2)
     c = first.counters
     assert c["rows_computed"] == c["distinct_shooters"] == len(set(first.order)) < len(patches)
-    assert c["hemicubes_rendered"] == c["rows_computed"]
+    # one hemicube a row, and k × k more for a row blind from its patch's centre (under a block)
+    assert c["hemicubes_rendered"] == c["rows_computed"] + R.RESAMPLE_BLIND ** 2 * c["blind_rows_resampled"]
     rendered = rows.counters["hemicubes_rendered"]
     bluer = patches.emission * np.array([0.2, 0.5, 3.0])            # a new light colour: same geometry
     second = R.solve_progressive(REF, rows, patches.areas, patches.reflectance * 0.9, bluer, 1e-2)
@@ -346,4 +347,6 @@ def test19_every_solver_option_solves_the_same_equations(cornell_rows):
     want = results["direct"].radiosity
     for solver, sol in results.items():
         assert np.abs(sol.radiosity - want).sum() / want.sum() < 1e-5, solver
-    assert rows.counters["hemicubes_rendered"] == len(patches), "the full-matrix solvers reuse the cached rows"
+    assert rows.counters["rows_computed"] == len(patches), "the full-matrix solvers reuse the cached rows"
+    assert rows.counters["hemicubes_rendered"] == (len(patches) + R.RESAMPLE_BLIND ** 2
+                                                   * rows.counters["blind_rows_resampled"])

@@ -42,6 +42,8 @@ TASKS = (
 )
 
 SOLVERS = ("progressive", "jacobi", "gauss-seidel", "direct")
+#: a patch blind from its centre (under a block resting on it) shoots from the seeing part of a 3 × 3 grid over it
+RESAMPLE_BLIND = 3
 
 
 @dataclass(frozen=True)
@@ -251,7 +253,7 @@ def hemicube_formfactors(quads: np.ndarray, resolution: int = 128, proximity: st
 
     impl = load_impl(resolve_impl("reference", "hemicube"), "hemicube")
     return HemicubeFormFactors(quads, impl, resolution=resolution, proximity=proximity, ctx=ctx,
-                               batch=batch, seed=seed)
+                               batch=batch, seed=seed, resample_blind=RESAMPLE_BLIND)
 
 
 @dataclass
