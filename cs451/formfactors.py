@@ -444,9 +444,8 @@ class HemicubeFormFactors:
         if self.resample_blind:
             blind = [k for k, i in enumerate(batch) if rows[k].sum() < BLIND_ROW_SUM]
             if blind:
-                again = self._resampled_rows([batch[k] for k in blind])
-                for k, row in zip(blind, again):
-                    if not np.isnan(row).any():
+                for k, row in zip(blind, self._resampled_rows([batch[k] for k in blind])):
+                    if row is not None:
                         rows[k] = row
         t2 = time.perf_counter()
         for k, i in enumerate(batch):
@@ -455,23 +454,21 @@ class HemicubeFormFactors:
             self.counters["rows_computed"] += 1
         self.seconds["proximity"] += time.perf_counter() - t2
 
-    def _resampled_rows(self, patches: list[int]) -> np.ndarray:
-        """Rows of patches blind from their centres: the area-weighted mean over the sub-quad centres that see."""
+    def _resampled_rows(self, patches: list[int]) -> list[np.ndarray | None]:
+        """Rows of patches blind from their centres: the area-weighted mean over the sub-quad centres that see
+        (None where none sees: the patch faces an opening, and its centre's row stands)."""
         points = [self.shooter_points(i, self.resample_blind) for i in patches]
         stands = [(i, p) for i, (ps, _) in zip(patches, points) for p in ps]
         jobs = [(k, p, self.normals[i], float(self.normals[i] @ self.centers[i]), i, 1.0) for k, (i, p) in enumerate(stands)]
         sub = self._render_rows(jobs, len(jobs))
-        out = np.zeros((len(patches), self.n))
+        out: list[np.ndarray | None] = []
         start = 0
-        for k, (ps, weights) in enumerate(points):
+        for ps, weights in points:
             rows = sub[start:start + len(ps)]
             start += len(ps)
             sums = rows.sum(axis=1)
-            if sums.max() < BLIND_ROW_SUM:
-                out[k] = np.nan                   # blind from everywhere (it faces an opening): keep the centre's row
-                continue
-            seeing = sums >= 0.5 * sums.max()
-            out[k] = weights[seeing] @ rows[seeing] / weights[seeing].sum()
+            seeing = sums >= max(0.5 * sums.max(), BLIND_ROW_SUM)
+            out.append(weights[seeing] @ rows[seeing] / weights[seeing].sum() if seeing.any() else None)
         self.counters["blind_rows_resampled"] += len(patches)
         return out
 
