@@ -158,8 +158,7 @@ def run_substructured(ref: Any, scene_name: str, patch_size: float, resolution: 
     row_seconds = (time.perf_counter() - start) / len(elements)
     truth = R.solve_direct(R.shooting_matrix(F, a), rho, E)
     # every patch row rendered up front, so that the solve's clock holds the shooting alone; rows are charged per shooter
-    patch_rows = S.PatchToElementRows(engine, patches.quads, parent)
-    rows = R.MatrixRows(np.stack([patch_rows.row(p) for p in range(len(patches))]))
+    rows = R.MatrixRows(S.PatchToElementRows(engine, patches.quads, parent).matrix())
     curves: dict[str, list] = {}
     for label, use_ambient in (("substructured", False), ("substructured+ambient", True)):
         curve: list[tuple[float, float, int]] = []

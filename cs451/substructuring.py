@@ -44,13 +44,23 @@ class PatchToElementRows:
         self.counters = {"hemicubes_rendered": 0, "rows_computed": 0, "rows_cached_hits": 0}
 
     def row(self, p: int) -> np.ndarray:
-        if p in self._rows:
-            self.counters["rows_cached_hits"] += 1
-        else:
-            self._rows[p] = self.engine.rows_at(self.centers[p], self.normals[p], self.lift[p], ids=[p])[0]
-            self.counters["rows_computed"] += 1
-            self.counters["hemicubes_rendered"] += 1
-        return self._rows[p]
+        return self.rows([p])[0]
+
+    def rows(self, indices: Any) -> np.ndarray:
+        """Rows (k, m) for patches ``indices``; the missing ones are rendered together (many hemicubes per read-back)."""
+        idx = [int(p) for p in indices]
+        missing = list(dict.fromkeys(p for p in idx if p not in self._rows))
+        self.counters["rows_cached_hits"] += len(idx) - len(missing)
+        if missing:
+            fresh = self.engine.rows_at(self.centers[missing], self.normals[missing], self.lift[missing], ids=missing)
+            self._rows.update(zip(missing, fresh))
+            self.counters["rows_computed"] += len(missing)
+            self.counters["hemicubes_rendered"] += len(missing)
+        return np.stack([self._rows[p] for p in idx])
+
+    def matrix(self) -> np.ndarray:
+        """Every patch's row (n, m)."""
+        return self.rows(range(len(self.patches)))
 
 
 @dataclass
