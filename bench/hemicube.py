@@ -31,7 +31,9 @@ from autograder.hemicube import truth
 from cs451.formfactors import HemicubeFormFactors, formfactor_matrix_raycast
 from cs451.gl import create_context, renderer_name
 from cs451.impl import load_impl, resolve_impl
-from cs451.patches import scene_polygons, subdivide_uniform
+from cs451.patches import scene_polygons
+
+from bench.meshes import subdivide_uniform
 from cs451.scene import load_scene
 
 

@@ -144,7 +144,7 @@ def run_substructured(ref: Any, scene_name: str, patch_size: float, resolution: 
     system (the answer the full-matrix methods give), with the same price per row.
     """
     from cs451.patches import patch_areas
-    from cs451 import substructuring as S
+    from bench import substructuring as S
 
     scene = load_scene(scene_name)
     patches = R.make_patches(scene, ref, patch_size)

@@ -121,7 +121,11 @@ def _cmd_passed(a: argparse.Namespace) -> int:
 
 def _cmd_release(a: argparse.Namespace) -> int:
     from .packaging.release import build_release
-    out = build_release(a.stage, a.output)
+    included = tuple(a.include_reference or ())
+    if included:
+        print(f"warning: the release ships the reference solution of {', '.join(included)}: give it to students "
+              "only after that stage's deadline", file=sys.stderr)
+    out = build_release(a.stage, a.output, include_reference=included)
     print(f"wrote the student repository for {a.stage} to {out} (push it as the GitHub Classroom template)")
     return 0
 
@@ -194,6 +198,8 @@ def build_parser() -> argparse.ArgumentParser:
                                     "with the reference's answers, and a workflow that runs them on push.")
     rl.add_argument("stage", choices=stage_names())
     rl.add_argument("-o", "--output", required=True, help="a new folder to write the repository into")
+    rl.add_argument("--include-reference", action="append", metavar="STAGE",
+                    help="also ship this earlier stage's reference (one the stage builds on), after its deadline")
     rl.set_defaults(func=_cmd_release)
 
     b = sub.add_parser("bench", help="time-against-error benchmarks", description="Run a stage's benchmark; prints a table and writes JSON.")

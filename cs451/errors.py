@@ -13,3 +13,7 @@ class InputError(KitError):
         self.file, self.path, self.message = file, path, message
         where = f"{file}: {path}" if path else file
         super().__init__(f"{where}: {message}")
+
+
+class SubmissionError(KitError):
+    """The submission itself cannot be graded (no package in it, too large, not a folder): the student can fix it."""

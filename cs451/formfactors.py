@@ -32,7 +32,7 @@ from typing import Any, Iterable
 import numpy as np
 
 from .errors import KitError
-from .patches import as_quads, patch_areas, patch_centers, patch_normals, patch_triangles, subdivide_uniform
+from .patches import as_quads, patch_areas, patch_centers, patch_normals, patch_triangles
 from .stages import hemicube as H
 
 #: Put in front of the student's vertex shader (H4); the kit defines the two functions after it.
@@ -116,6 +116,15 @@ def hemicube_inputs(quads: np.ndarray, impl: Any, patch: int, rotate: bool = Fal
     near = d_near if near is None else near
     views = H.call_views(impl, c, n, hemicube_up(n, patch, rotate, seed))
     return views, H.call_projections(impl, near, far), near, far
+
+
+def _sub_quads(quad: np.ndarray, k: int) -> np.ndarray:
+    """The k × k bilinear cells of one quad, (k², 4, 3): where a split shooter's hemicubes stand."""
+    t = np.linspace(0.0, 1.0, k + 1)
+    s_, t_ = (g[:, :, None] for g in np.meshgrid(t, t, indexing="ij"))
+    a, b, c, d = quad
+    grid = (1 - s_) * (1 - t_) * a + s_ * (1 - t_) * b + s_ * t_ * c + (1 - s_) * t_ * d      # (k+1, k+1, 3)
+    return np.stack([grid[:-1, :-1], grid[1:, :-1], grid[1:, 1:], grid[:-1, 1:]], axis=2).reshape(-1, 4, 3)
 
 
 def clip_polygon_to_plane(polygon: np.ndarray, point: np.ndarray, normal: np.ndarray) -> np.ndarray:
@@ -395,7 +404,7 @@ class HemicubeFormFactors:
         split = self.shooter_split if split is None else split
         if split == 1:
             return self.centers[i][None], np.ones(1)
-        sub, _ = subdivide_uniform(self.quads[i][None], split)
+        sub = _sub_quads(self.quads[i], split)
         areas = patch_areas(sub)
         return patch_centers(sub), areas / areas.sum()
 
@@ -618,24 +627,16 @@ def item_buffer_image(ff: HemicubeFormFactors, patch: int, size: tuple[int, int]
     return image
 
 
-def formfactor_image(scene: Any, quads: np.ndarray, row: np.ndarray, size: tuple[int, int] | None = None) -> np.ndarray:
-    """The scene from its camera, each patch painted with F from the chosen patch to it (scaled to the largest)."""
+def formfactor_image(scene: Any, quads: np.ndarray, row: np.ndarray, impl: Any,
+                     size: tuple[int, int] | None = None) -> np.ndarray:
+    """The scene from its camera, each patch painted with F from the chosen patch to it (scaled to the largest).
+
+    ``impl`` (a stage-3 implementation) places the camera: see :mod:`cs451.viewing`."""
     from .gl import create_context
+    from .viewing import camera_projection, camera_view
     width, height = size or (scene.image.width, scene.image.height)
-    cam = scene.camera
-    f = np.asarray(cam.center, float) - np.asarray(cam.eye, float)
-    f /= np.linalg.norm(f)
-    s = np.cross(f, cam.up)
-    s /= np.linalg.norm(s)
-    u = np.cross(s, f)
-    view = np.eye(4)
-    view[0, :3], view[1, :3], view[2, :3] = s, u, -f
-    view[:3, 3] = -view[:3, :3] @ np.asarray(cam.eye, float)
-    t = 1 / np.tan(np.radians(cam.fovy) / 2)
-    a = width / height
-    proj = np.array([[t / a, 0, 0, 0], [0, t, 0, 0],
-                     [0, 0, (cam.far + cam.near) / (cam.near - cam.far), 2 * cam.far * cam.near / (cam.near - cam.far)],
-                     [0, 0, -1, 0]])
+    view = camera_view(scene.camera, lambda c, n, u: H.call_views(impl, c, n, u))
+    proj = camera_projection(scene.camera, width, height)
     value = row / max(row.max(), 1e-300)
     colours = np.stack([value, value ** 2, 0.2 * (1 - value)], axis=1)   # a warm ramp; dark blue is "sees nothing"
     tris, ids = patch_triangles(quads)

@@ -8,7 +8,7 @@ from pathlib import Path
 from types import ModuleType
 
 from . import KIT_ROOT
-from .errors import KitError
+from .errors import KitError, SubmissionError
 
 
 def resolve_impl(spec: str | Path, stage: str) -> Path:
@@ -19,7 +19,7 @@ def resolve_impl(spec: str | Path, stage: str) -> Path:
     else:
         root = Path(spec).expanduser()
         if not root.exists():
-            raise KitError(f"{root}: submission folder not found")
+            raise SubmissionError(f"{root}: submission folder not found")
     root = root.resolve()
     for candidate in (root / stage, root):
         if (candidate / "__init__.py").is_file():
@@ -28,10 +28,25 @@ def resolve_impl(spec: str | Path, stage: str) -> Path:
     if len(nested) == 1:  # an upload of a whole repository: <repo>/starter/sphere/, say
         return nested[0]
     if nested:
-        raise KitError(f"{root}: more than one '{stage}' package in it ({', '.join(str(p) for p in nested)}); "
+        raise SubmissionError(f"{root}: more than one '{stage}' package in it ({', '.join(str(p) for p in nested)}); "
                        f"submit just one")
-    raise KitError(f"{root}: no '{stage}' package here (expected {root / stage / '__init__.py'}; "
+    raise SubmissionError(f"{root}: no '{stage}' package here (expected {root / stage / '__init__.py'}; "
                    f"copy starter/{stage}/ and edit it)")
+
+
+def earlier_stage_impl(stage: str) -> Path:
+    """The implementation of an earlier stage that a later stage's engine runs (stage 4 runs stage 3's hemicube).
+
+    The kit's reference where this copy has it (the instructor's kit, or a student copy released with
+    ``--include-reference``); in a student copy without it, the student's own package of that stage,
+    copied beside this one. Student code of the current stage never gets here.
+    """
+    for root in (KIT_ROOT / "reference", KIT_ROOT):
+        if (root / stage / "__init__.py").is_file():
+            return root / stage
+    raise KitError(f"this stage draws with a stage-'{stage}' implementation, and this copy has none: copy your "
+                   f"own {stage}/ package from that stage's repository into {KIT_ROOT} (or ask your instructor "
+                   f"for a release built with --include-reference {stage})")
 
 
 def load_impl(folder: Path, stage: str) -> ModuleType:

@@ -3,9 +3,9 @@
 A patch is a planar convex quad with its corners counter-clockwise seen from
 the front (its front normal is the Newell normal). A triangle is a quad whose
 last corner repeats the third. Everything here is float64 and vectorised over
-patches; nothing here subdivides (subdividing is a stage-4 task), except
-:func:`subdivide_uniform`, which the benchmarks and tests use to build
-fine meshes of known scenes.
+patches; nothing here subdivides: subdividing is a stage-4 task (R1), and this
+module ships to students (the benchmarks' and tests' fine meshes come from
+``bench/meshes.py``).
 """
 from __future__ import annotations
 
@@ -110,22 +110,3 @@ def scene_polygons(scene: Any) -> tuple[np.ndarray, list[str], np.ndarray]:
     if not quads:
         raise KitError(f"{scene.source or scene.name or '<scene>'}: objects: no polygons or area lights to make patches of")
     return np.concatenate(quads), names, np.asarray(emission, dtype=np.float64).reshape(-1, 3)
-
-
-def subdivide_uniform(quads: Any, k: int) -> tuple[np.ndarray, np.ndarray]:
-    """Bilinear subdivision of every quad into k×k quads (for benches and tests): (quads (n·k², 4, 3), parent (n·k²,)).
-
-    A triangle patch (last corner repeated) becomes k² thin quads and triangles; all stay planar
-    and keep the parent's orientation.
-    """
-    q = as_quads(quads)
-    if k < 1:
-        raise KitError(f"subdivision must be >= 1, got {k}")
-    t = np.linspace(0.0, 1.0, k + 1)
-    s_, t_ = np.meshgrid(t, t, indexing="ij")          # (k+1, k+1)
-    a, b, c, d = (q[:, i][:, None, None, :] for i in range(4))
-    s3, t3 = s_[None, :, :, None], t_[None, :, :, None]
-    grid = (1 - s3) * (1 - t3) * a + s3 * (1 - t3) * b + s3 * t3 * c + (1 - s3) * t3 * d  # (n, k+1, k+1, 3)
-    out = np.stack([grid[:, :-1, :-1], grid[:, 1:, :-1], grid[:, 1:, 1:], grid[:, :-1, 1:]], axis=3)  # (n, k, k, 4, 3)
-    parent = np.repeat(np.arange(len(q)), k * k)
-    return out.reshape(-1, 4, 3), parent

@@ -12,9 +12,10 @@ from autograder.hemicube import truth
 from cs451.errors import KitError
 from cs451.formfactors import HemicubeFormFactors, clip_polygon_to_plane, formfactor_matrix_raycast, gauss_points
 from cs451.impl import load_impl, resolve_impl
-from cs451.patches import (patch_areas, patch_centers, patch_normals, patch_triangles, polygon_to_quads, scene_polygons,
-                           subdivide_uniform)
+from cs451.patches import patch_areas, patch_centers, patch_normals, patch_triangles, polygon_to_quads, scene_polygons
 from cs451.scene import load_scene
+
+from bench.meshes import subdivide_uniform
 
 
 @pytest.fixture(scope="module")

@@ -17,7 +17,9 @@ import pytest
 from autograder.radiosity import truth
 from cs451.errors import InputError, KitError
 from cs451.impl import load_impl, resolve_impl
-from cs451.patches import patch_areas, patch_normals, subdivide_uniform
+from cs451.patches import patch_areas, patch_normals
+
+from bench.meshes import subdivide_uniform
 from cs451.scene import BUNDLED_DIR, load_scene, parse_scene
 from cs451.stages import radiosity as R
 

@@ -9,11 +9,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cs451 import substructuring as S
+from bench import substructuring as S
 from cs451.errors import KitError
 from cs451.formfactors import HemicubeFormFactors
 from cs451.impl import load_impl, resolve_impl
-from cs451.patches import patch_areas, subdivide_uniform
+from cs451.patches import patch_areas
+
+from bench.meshes import subdivide_uniform
 from cs451.scene import load_scene
 from cs451.stages import radiosity as R
 from test_radiosity import random_scene

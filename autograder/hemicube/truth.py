@@ -1,5 +1,8 @@
 """Independent truths for stage 3: closed-form form factors, and the exact matrices the tasks define.
 
+Computed on the grader's side only and never shipped: a student copy gets the
+arrays these give for the public tests (``checks.py`` compares).
+
 Nothing here calls the reference. The closed forms are Howell's catalog
 (A Catalog of Radiation Heat Transfer Configuration Factors, 3rd ed.):
 C-11 parallel opposed rectangles, C-14 perpendicular rectangles sharing an
@@ -148,6 +151,16 @@ def views(params: dict) -> np.ndarray:
 def projections(params: dict) -> np.ndarray:
     near, far = params["near"], params["far"]
     return np.stack([frustum(-near, near, -near, near, near, far), frustum(-near, near, 0, near, near, far)])
+
+
+def tables(params: dict) -> dict[str, np.ndarray]:
+    """H1's two tables at the test's resolution."""
+    return {"top": delta_top(params["resolution"]), "side": delta_side(params["resolution"])}
+
+
+def contour_value(params: dict) -> np.ndarray:
+    """H6: Lambert's formula for the test's point, normal and polygon."""
+    return np.array(contour(params["point"], params["normal"], params["polygon"]))
 
 
 def row_from_items(params: dict) -> np.ndarray:

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from autograder.radiosity import truth
+from autograder.radiosity import truth as truths
 from autograder.radiosity.public import (CORNELL, ROOM, by_hand_test, furnace_test, lists, random_system, render_test,
                                          scene_quads, scene_solve_test, scene_variant, shoot_test, subdivide_test,
                                          vertex_test, ambient_test)
@@ -17,7 +17,7 @@ _dB = _B * _rng.uniform(0, 1, (8, 3))
 
 def _triangle_patches():
     tri = np.array([[[0, 0, 0], [2, 0, 0], [0, 2, 0], [0, 2, 0]], [[0, 0, 0], [0, 2, 0], [0, 2, 2], [0, 0, 2]]], float)
-    patches, parent = truth.subdivide_by_hand(tri, 0.7)
+    patches, parent = truths.subdivide_by_hand(tri, 0.7)
     return lists(patches), parent.tolist(), lists(np.random.default_rng(2).uniform(0, 1, (len(patches), 3)))
 
 
@@ -25,18 +25,15 @@ BLUE_LIGHT = scene_variant(CORNELL, lights=[{**CORNELL["lights"][0], "radiance":
 SMALL_ROOM = scene_variant(ROOM, radiosity={"patch_size": 1.0})
 
 TESTS = [
-    subdivide_test("R1 subdivide: max_edge 0 keeps the quads", 2, scene_quads("cornell-box", 5), 0.0, hidden=True),
-    subdivide_test("R1 subdivide: the room's long walls at 0.7 m", 3, scene_quads("room", 6), 0.7, hidden=True),
-    shoot_test("R2 shoot: a random reciprocal system, patch 3", 5, RANDOM, 3, radiosity=lists(_B), unshot=lists(_dB),
-               hidden=True),
+    subdivide_test("R1 subdivide: max_edge 0 keeps the quads", 2, scene_quads("cornell-box", 5), 0.0),
+    subdivide_test("R1 subdivide: the room's long walls at 0.7 m", 3, scene_quads("room", 6), 0.7),
+    shoot_test("R2 shoot: a random reciprocal system, patch 3", 5, RANDOM, 3, radiosity=lists(_B), unshot=lists(_dB)),
     by_hand_test("R3 progressive_refinement: a closed random system, overshooting 1.5", 4, CLOSED, 100_000,
-                 tolerance=1e-6, overshoot=1.5, hidden=True),
-    furnace_test("R3 progressive_refinement: the furnace, ρ = 0.99, overshooting 1.5", 3, 0.99, 1e-4, overshoot=1.5,
-                 hidden=True),
-    scene_solve_test("R3 progressive_refinement: a coarse room converges to the direct solve", 3, SMALL_ROOM, 1.0,
-                     hidden=True),
-    ambient_test("R4 ambient_term: a random system", 4, RANDOM["areas"], RANDOM["reflectance"], lists(_dB), hidden=True),
-    vertex_test("R5 vertex_colors: triangles and a quad", 3, *_triangle_patches(), hidden=True),
-    render_test("R5 render: the Cornell box under a blue light", 4, BLUE_LIGHT, (96, 96), 120.0, hidden=True),
-    render_test("R5 render: a coarse room", 4, SMALL_ROOM, (120, 90), 1.0, hidden=True),
+                 tolerance=1e-6, overshoot=1.5),
+    furnace_test("R3 progressive_refinement: the furnace, ρ = 0.99, overshooting 1.5", 3, 0.99, 1e-4, overshoot=1.5),
+    scene_solve_test("R3 progressive_refinement: a coarse room converges to the direct solve", 3, SMALL_ROOM, 1.0),
+    ambient_test("R4 ambient_term: a random system", 4, RANDOM["areas"], RANDOM["reflectance"], lists(_dB)),
+    vertex_test("R5 vertex_colors: triangles and a quad", 3, *_triangle_patches()),
+    render_test("R5 render: the Cornell box under a blue light", 4, BLUE_LIGHT, (96, 96), 120.0),
+    render_test("R5 render: a coarse room", 4, SMALL_ROOM, (120, 90), 1.0),
 ]

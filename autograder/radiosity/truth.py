@@ -1,4 +1,4 @@
-"""Independent truths for stage 4, computed on the grader's side only.
+"""Independent truths for stage 4, computed on the grader's side only; never shipped to students.
 
 Nothing here comes from reference/ or from the hemicube: the white furnace's
 closed form B = E/(1 − ρ); exact form factors of a cube (Howell's catalog,
@@ -180,3 +180,33 @@ def subdivide_by_hand(quads, max_edge: float) -> tuple[np.ndarray, np.ndarray]:
                 out.append([at(a, b), at(a + 1, b), at(a + 1, b + 1), at(a, b + 1)])
                 parent.append(k)
     return np.array(out), np.array(parent)
+
+
+# --- truths of tests' parameters ------------------------------------------------------------
+
+def subdivision(p: dict) -> dict[str, np.ndarray]:
+    patches, parent = subdivide_by_hand(p["quads"], p["max_edge"])
+    return {"patches": patches.reshape(-1, 4, 3), "parent": parent}
+
+
+def shot(p: dict) -> dict[str, np.ndarray]:
+    B, dB = shoot_by_hand(p["i"], p["F"], p["areas"], p["reflectance"], p["radiosity"], p["unshot"])
+    return {"radiosity": np.array(B), "unshot": np.array(dB)}
+
+
+def shooting_loop(p: dict) -> dict[str, np.ndarray]:
+    B, dB, order = progressive_by_hand(p["F"], p["areas"], p["reflectance"], p["emission"], p["tolerance"],
+                                       p["max_shots"], p.get("overshoot", 1.0))
+    return {"radiosity": B, "unshot": dB, "order": np.array(order, dtype=np.int64)}
+
+
+def ambient(p: dict) -> np.ndarray:
+    return ambient_by_hand(p["areas"], p["reflectance"], p["unshot"])
+
+
+def vertex_colours(p: dict) -> dict[str, np.ndarray]:
+    """Each corner's colour, and how many vertices there are: one per distinct point per polygon."""
+    q = np.asarray(p["quads"])
+    keys = {(int(par), *np.round(c / 1e-6).astype(int).tolist()) for quad, par in zip(q, p["parent"]) for c in quad}
+    return {"corner_colors": corner_colors_by_hand(p["quads"], p["parent"], np.asarray(p["radiosity"])),
+            "vertex_count": np.array(len(keys))}

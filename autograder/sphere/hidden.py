@@ -25,16 +25,16 @@ FAR_VIEWER = scene_variant(
     materials={"green": {"diffuse": [0.3, 0.9, 0.5], "specular": [0.7, 0.7, 0.7], "shininess": 30}})
 
 TESTS = [
-    perspective_test("S1 perspective: narrow, tall window", 4, hidden=True, fovy=12.5, aspect=0.4, near=0.01, far=1e4),
-    look_at_test("S2 look_at: looking down with a tilted up vector", 4, hidden=True,
+    perspective_test("S1 perspective: narrow, tall window", 4, fovy=12.5, aspect=0.4, near=0.01, far=1e4),
+    look_at_test("S2 look_at: looking down with a tilted up vector", 4,
                  eye=[0, 10, 0.1], center=[0, 0, 0], up=[1, 1, 0]),
-    mesh_test("S3 sphere_mesh: radius 0.5, 50 slices, 3 stacks", 6, hidden=True, radius=0.5, slices=50, stacks=3),
-    shader_test("S4 Gouraud: shiny red sphere with emission, 256×256", "S4", 5, SHINY_RED, (256, 256), hidden=True),
-    shader_test("S4 Gouraud: two lights, attenuation, two spheres, 200×400", "S4", 5, TWO_LIGHTS, (200, 400), hidden=True),
-    shader_test("S5 Phong: shiny red sphere, 256×256", "S5", 4, SHINY_RED, (256, 256), hidden=True),
-    shader_test("S5 Phong: infinite viewer, oblique camera, 300×200", "S5", 3, FAR_VIEWER, (300, 200), hidden=True),
-    reshape_test("S6 reshape: a minimised window (height 0)", 4, hidden=True, width=640, height=0),
-    keys_test("S7 handle_key: Q, escape, + and - within their limits", 5, hidden=True, presses=[
+    mesh_test("S3 sphere_mesh: radius 0.5, 50 slices, 3 stacks", 6, radius=0.5, slices=50, stacks=3),
+    shader_test("S4 Gouraud: shiny red sphere with emission, 256×256", "S4", 5, SHINY_RED, (256, 256)),
+    shader_test("S4 Gouraud: two lights, attenuation, two spheres, 200×400", "S4", 5, TWO_LIGHTS, (200, 400)),
+    shader_test("S5 Phong: shiny red sphere, 256×256", "S5", 4, SHINY_RED, (256, 256)),
+    shader_test("S5 Phong: infinite viewer, oblique camera, 300×200", "S5", 3, FAR_VIEWER, (300, 200)),
+    reshape_test("S6 reshape: a minimised window (height 0)", 4, width=640, height=0),
+    keys_test("S7 handle_key: Q, escape, + and - within their limits", 5, presses=[
         ["Q", START], ["escape", {**START, "shading": "phong"}], ["+", START], ["+", {**START, "slices": 200, "stacks": 256}],
         ["-", START], ["-", {**START, "slices": 5, "stacks": 4}]]),
 ]

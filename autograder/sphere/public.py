@@ -9,11 +9,12 @@ import copy
 import json
 
 from cs451.compare import ImageTolerance
-from cs451.grading.checks import all_of, array_close, image_matches
-from cs451.grading.spec import Test
+from cs451.grading.checks import all_of, array_close, image_matches, sub
+from cs451.grading.spec import Test, truth
+
 from cs451.scene import BUNDLED_DIR
 
-from autograder.sphere import truth
+from autograder.sphere import checks, truth as truths
 
 #: Tolerance of the image tests: the measured margin is in the kit README ("Tolerances").
 IMAGE = ImageTolerance(threshold=0.016, max_bad_fraction=0.01, shift=1)
@@ -31,38 +32,55 @@ def scene_variant(**changes) -> dict:
     return scene
 
 
-def perspective_test(name, points, hidden=False, **params) -> Test:
-    return Test(name, "S1", points, "perspective", params, array_close("matrix", truth.perspective, what="the matrix"),
-                MATRIX_TOL, expected="none", hidden=hidden, timeout=QUICK)
+def perspective_test(name, points, **params) -> Test:
+    return Test(name, "S1", points, "perspective", params, array_close("matrix", what="the matrix"),
+                MATRIX_TOL, expected="none", truth=truth(truths.perspective), timeout=QUICK)
 
 
-def look_at_test(name, points, hidden=False, **params) -> Test:
-    return Test(name, "S2", points, "look_at", params, array_close("matrix", truth.look_at, what="the matrix"),
-                MATRIX_TOL, expected="none", hidden=hidden, timeout=QUICK)
+def look_at_test(name, points, **params) -> Test:
+    return Test(name, "S2", points, "look_at", params, array_close("matrix", what="the matrix"),
+                MATRIX_TOL, expected="none", truth=truth(truths.look_at), timeout=QUICK)
 
 
-def mesh_test(name, points, hidden=False, **params) -> Test:
-    return Test(name, "S3", points, "sphere_mesh", params, all_of(truth.mesh_checks()),
-                "positions within 1e-6·radius of freeglut's; normals unit within 1e-5", expected="none", hidden=hidden,
-                timeout=QUICK)
+MESH_CHECKS = all_of([("vertex and triangle counts", sub(checks.mesh_counts)),
+                      ("unit outward normals", sub(checks.mesh_normals)),
+                      ("glutSolidSphere's vertices", sub(checks.mesh_vertices)),
+                      ("closed, counter-clockwise surface", sub(checks.mesh_closed)),
+                      ("no zero-area triangles", sub(checks.mesh_no_degenerate))],
+                     require=["vertex and triangle counts"])
 
 
-def shader_test(name, task, points, scene, size, hidden=False) -> Test:
+def mesh_test(name, points, **params) -> Test:
+    return Test(name, "S3", points, "sphere_mesh", params, MESH_CHECKS,
+                "positions within 1e-6·radius of freeglut's; normals unit within 1e-5", expected="none",
+                truth=truth(truths.sphere_mesh), timeout=QUICK)
+
+
+def shader_test(name, task, points, scene, size) -> Test:
     shading = "gouraud" if task == "S4" else "phong"
     return Test(name, task, points, "render", {"scene": scene, "size": list(size), "shading": shading},
-                image_matches(IMAGE), IMAGE.describe(), given="parts", hidden=hidden, timeout=RENDER)
+                image_matches(IMAGE), IMAGE.describe(), given="parts", timeout=RENDER)
 
 
-def reshape_test(name, points, hidden=False, **params) -> Test:
+RESHAPE_CHECKS = all_of([("viewport covers the window", sub(checks.reshape_viewport)),
+                         ("aspect ratio kept", sub(checks.reshape_aspect)),
+                         ("vertical field of view kept", sub(checks.reshape_fovy))])
+
+
+def reshape_test(name, points, **params) -> Test:
     params.setdefault("camera", SPHERE_SCENE["camera"])
-    return Test(name, "S6", points, "reshape", params, all_of(truth.reshape_checks()),
-                "viewport exact; aspect and field of view within 1e-6 relative", expected="none", hidden=hidden,
-                timeout=QUICK)
+    return Test(name, "S6", points, "reshape", params, RESHAPE_CHECKS,
+                "viewport exact; aspect and field of view within 1e-6 relative", expected="none",
+                truth=truth(truths.reshape), timeout=QUICK)
 
 
-def keys_test(name, points, presses, hidden=False) -> Test:
-    return Test(name, "S7", points, "handle_key", {"presses": presses}, all_of(truth.key_checks()),
-                "exact", expected="none", hidden=hidden, timeout=QUICK)
+def keys_test(name, points, presses) -> Test:
+    """One sub-check per press that changes the state; presses that change nothing are checked but earn nothing alone."""
+    changing = [i for i, (key, state) in enumerate(presses) if truths.key_truth(key, state) != state]
+    parts = [(f"press {i + 1} ({key!r})", sub(checks.key_press, index=i)) for i, (key, _) in enumerate(presses)]
+    return Test(name, "S7", points, "handle_key", {"presses": presses},
+                all_of(parts, earn_with=[parts[i][0] for i in changing]), "exact", expected="none",
+                truth=truth(truths.keys), timeout=QUICK)
 
 
 START = {"running": True, "shading": "gouraud", "slices": 32, "stacks": 32}

@@ -1,13 +1,13 @@
-"""Independent truths for stage 1, computed on the grader's side only.
+"""Independent truths for stage 1, computed on the grader's side only; never shipped to students.
 
 Nothing here comes from reference/: projections come from pyrender, the view
 matrix from inverting a camera pose, the sphere from freeglut's formula, key
-handling from the handout's table.
+handling from the handout's table. Each truth takes a test's parameters and
+returns arrays (a student copy gets those arrays for the public tests, not this code).
 """
 from __future__ import annotations
 
 import numpy as np
-import trimesh
 
 from cs451.pyrender_shim import pyrender
 from cs451.scene import Camera
@@ -45,84 +45,18 @@ def freeglut_sphere_vertices(radius: float, slices: int, stacks: int) -> np.ndar
     return np.array(verts)
 
 
-def _match(a: np.ndarray, b: np.ndarray, tol: float) -> int:
-    """How many points of ``a`` have no point of ``b`` within ``tol``."""
-    missing = 0
-    for start in range(0, len(a), 512):
-        d = np.linalg.norm(a[start:start + 512, None, :] - b[None, :, :], axis=2)
-        missing += int((d.min(axis=1) > tol).sum())
-    return missing
+def sphere_mesh(params: dict) -> dict[str, np.ndarray]:
+    """glutSolidSphere's vertices, and how many vertices and triangles it has."""
+    r, slices, stacks = params["radius"], params["slices"], params["stacks"]
+    return {"vertices": freeglut_sphere_vertices(r, slices, stacks),
+            "counts": np.array([slices * (stacks - 1) + 2, 2 * slices * (stacks - 1)])}
 
 
-def mesh_checks() -> list:
-    def counts(out, p):
-        n, m = p["slices"] * (p["stacks"] - 1) + 2, 2 * p["slices"] * (p["stacks"] - 1)
-        got_n, got_m = len(out["positions"]), len(out["triangles"])
-        if (got_n, got_m) != (n, m):
-            return f"{got_n} vertices and {got_m} triangles, expected {n} and {m}"
-
-    def normals(out, p):
-        nrm, pos = np.asarray(out["normals"], float), np.asarray(out["positions"], float)
-        length = np.linalg.norm(nrm, axis=1)
-        if not np.allclose(length, 1.0, atol=1e-5):
-            return f"normals must have unit length (found lengths from {length.min():.4g} to {length.max():.4g})"
-        if not np.allclose(nrm, pos / p["radius"], atol=1e-5):
-            return "normals must point straight out of the sphere (position / radius)"
-
-    def tessellation(out, p):
-        want = freeglut_sphere_vertices(p["radius"], p["slices"], p["stacks"])
-        got = np.asarray(out["positions"], float)
-        tol = 1e-6 * p["radius"]
-        missing, extra = _match(want, got, tol), _match(got, want, tol)
-        if missing or extra:
-            return (f"{missing} of glutSolidSphere's vertices are missing and {extra} vertices are not on its "
-                    f"rings (poles on ±z, θ = πi/stacks, φ = -2πj/slices)")
-
-    def closed_and_outward(out, p):
-        mesh = trimesh.Trimesh(np.asarray(out["positions"], float), np.asarray(out["triangles"], int), process=False)
-        if not mesh.is_watertight:
-            return "the surface has holes or duplicated edges (not watertight)"
-        if not mesh.is_winding_consistent:
-            return "triangles are not wound consistently"
-        if mesh.volume <= 0:
-            return "triangles are wound clockwise seen from outside (they must be counter-clockwise)"
-
-    def no_degenerate(out, p):
-        pos, tri = np.asarray(out["positions"], float), np.asarray(out["triangles"], int)
-        area = 0.5 * np.linalg.norm(np.cross(pos[tri[:, 1]] - pos[tri[:, 0]], pos[tri[:, 2]] - pos[tri[:, 0]]), axis=1)
-        tiny = int((area <= 1e-12 * p["radius"] ** 2).sum())
-        if tiny:
-            return f"{tiny} triangles have zero area"
-
-    return [("vertex and triangle counts", counts), ("unit outward normals", normals),
-            ("glutSolidSphere's vertices", tessellation), ("closed, counter-clockwise surface", closed_and_outward),
-            ("no zero-area triangles", no_degenerate)]
-
-
-def reshape_checks() -> list:
-    def viewport(out, p):
-        got = tuple(int(v) for v in out["viewport"])
-        w, h = p["width"], p["height"]
-        allowed = {(0, 0, w, h), (0, 0, w, max(h, 1))}
-        if got not in allowed:
-            return f"viewport is {got}, expected (0, 0, {w}, {max(h, 1)}) to cover the window"
-
-    def aspect(out, p):
-        proj = np.asarray(out["projection"], float)
-        if not np.isfinite(proj).all():
-            return "the projection has NaN or infinite entries (a division by a zero height?)"
-        want = p["width"] / max(p["height"], 1)
-        got = proj[1, 1] / proj[0, 0] if proj[0, 0] else np.inf
-        if not np.isclose(got, want, rtol=1e-6):
-            return f"the projection's aspect ratio (P[1,1]/P[0,0]) is {got:.6g}, expected width/height = {want:.6g}"
-
-    def fovy(out, p):
-        proj = np.asarray(out["projection"], float)
-        want = 1 / np.tan(np.radians(Camera(**_camera(p)).fovy) / 2)
-        if not np.isclose(proj[1, 1], want, rtol=1e-6):
-            return f"P[1,1] is {proj[1, 1]:.6g}: the vertical field of view must stay {p['camera']['fovy']}° whatever the width"
-
-    return [("viewport covers the window", viewport), ("aspect ratio kept", aspect), ("vertical field of view kept", fovy)]
+def reshape(params: dict) -> dict[str, np.ndarray]:
+    """The viewport over the whole window (height 0 counts as 1), its aspect ratio and P[1,1] = cot(fovy/2)."""
+    w, h = params["width"], max(params["height"], 1)
+    fovy = Camera(**_camera(params)).fovy
+    return {"viewport": np.array([0, 0, w, h]), "aspect": np.array(w / h), "p11": np.array(1 / np.tan(np.radians(fovy) / 2))}
 
 
 def _camera(p: dict) -> dict:
@@ -144,15 +78,7 @@ def key_truth(key: str, state: dict) -> dict:
     return s
 
 
-def key_checks() -> list:
-    def make(field: str):
-        def sub(out, p):
-            wrong = []
-            for i, (key, state) in enumerate(p["presses"]):
-                want = key_truth(key, state)[field]
-                got = out[field][i].item()
-                if got != want:
-                    wrong.append(f"key {key!r} from {field}={state[field]!r} gave {got!r}, expected {want!r}")
-            return "; ".join(wrong[:3]) or None
-        return sub
-    return [(f"{f}", make(f)) for f in ("running", "shading", "slices", "stacks")]
+def keys(params: dict) -> dict[str, np.ndarray]:
+    """The state after each press, as parallel arrays (as the probe returns them)."""
+    states = [key_truth(key, state) for key, state in params["presses"]]
+    return {f: np.array([s[f] for s in states]) for f in ("running", "shading", "slices", "stacks")}

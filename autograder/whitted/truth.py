@@ -1,6 +1,7 @@
-"""Independent truths for stage 2, computed on the grader's side only.
+"""Independent truths for stage 2, computed on the grader's side only; never shipped to students.
 
-Nothing here comes from reference/: camera rays are checked by projecting them with
+Each truth takes a test's parameters and returns arrays (a student copy gets those
+arrays for the public tests, not this code; ``checks.py`` compares). Nothing here comes from reference/: camera rays are checked by projecting them with
 pyrender's camera, sphere and triangle hits against exact rational arithmetic
 (Python's fractions), depths against pyrender's rasteriser, reflection, refraction
 and Fresnel against their trigonometric forms, shadow rays against a brute-force
@@ -35,39 +36,15 @@ def _camera_pose(camera: dict) -> np.ndarray:
 
 # --- W1 ------------------------------------------------------------------------------------
 
-def camera_checks() -> list:
-    def origins(out, p):
-        eye = np.asarray(p["camera"]["eye"], float)
-        if not np.allclose(out["origins"], eye, rtol=1e-9, atol=1e-9 * (1 + np.abs(eye).max())):
-            return "every ray must start at the eye"
-
-    def unit(out, p):
-        length = np.linalg.norm(out["directions"], axis=1)
-        if not np.allclose(length, 1.0, atol=1e-9):
-            return f"directions must be unit vectors (lengths from {length.min():.6g} to {length.max():.6g})"
-
-    def through_pixel_centres(out, p):
-        cam, w, h = p["camera"], p["width"], p["height"]
-        proj = pyrender.PerspectiveCamera(yfov=np.radians(cam["fovy"]), aspectRatio=w / h, znear=0.01,
-                                          zfar=100.0).get_projection_matrix(w, h)
-        view = np.linalg.inv(_camera_pose(cam))
-        d = np.asarray(out["directions"], float)
-        eye = np.asarray(cam["eye"], float)
-        # a point along each ray, taken 1 unit in front of the eye (so near/far do not matter)
-        x = np.c_[eye + d, np.ones(len(d))] @ (proj @ view).T
-        if np.any(x[:, 3] <= 0):
-            return "some rays point behind the camera"
-        ndc = x[:, :2] / x[:, 3:4]
-        i, j = np.meshgrid(np.arange(w), np.arange(h), indexing="xy")
-        want = np.c_[(2 * (i.ravel() + 0.5) / w - 1), (1 - 2 * (j.ravel() + 0.5) / h)]
-        err = np.abs(ndc - want).max(axis=1)
-        if err.max() > 1e-6:
-            k = int(np.argmax(err))
-            return (f"ray {k} (column {k % w}, row {k // w}) goes through NDC {ndc[k].round(5).tolist()}, "
-                    f"expected the pixel centre {want[k].round(5).tolist()} (rows from the top)")
-
-    return [("origins at the eye", origins), ("unit directions", unit),
-            ("through pixel centres (pyrender's camera)", through_pixel_centres)]
+def camera(params: dict) -> dict[str, np.ndarray]:
+    """pyrender's clip-from-world matrix for the camera, and every pixel centre in NDC (rows from the top)."""
+    cam, w, h = params["camera"], params["width"], params["height"]
+    proj = pyrender.PerspectiveCamera(yfov=np.radians(cam["fovy"]), aspectRatio=w / h, znear=0.01,
+                                      zfar=100.0).get_projection_matrix(w, h)
+    view = np.linalg.inv(_camera_pose({"up": [0, 1, 0], **cam}))
+    i, j = np.meshgrid(np.arange(w), np.arange(h), indexing="xy")
+    ndc = np.c_[(2 * (i.ravel() + 0.5) / w - 1), (1 - 2 * (j.ravel() + 0.5) / h)]
+    return {"clip_from_world": proj @ view, "ndc": ndc, "eye": np.asarray(cam["eye"], float)}
 
 
 # --- W2, W3: exact rational arithmetic ---------------------------------------------------------
@@ -94,22 +71,11 @@ def sphere_exact(o, d, c, r) -> tuple[float, float]:
     return float((-b - s) / a), float((-b + s) / a)
 
 
-def sphere_checks(rel: float = 1e-9) -> list:
-    def roots(out, p):
-        o, d = _vec(p, "origins"), _vec(p, "directions")
-        bad = []
-        for i in range(len(o)):
-            want = sphere_exact(o[i], d[i], p["center"], p["radius"])
-            got = (float(out["t0"][i]), float(out["t1"][i]))
-            if np.isinf(want[0]) != np.isinf(got[0]) or np.isinf(want[1]) != np.isinf(got[1]):
-                bad.append(f"ray {i}: {'a miss' if np.isinf(want[0]) else 'a hit'} expected, got t = {got}")
-                continue
-            if not np.isinf(want[0]):
-                scale = rel * max(abs(want[1]), p["radius"])
-                if abs(got[0] - want[0]) > scale or abs(got[1] - want[1]) > scale:
-                    bad.append(f"ray {i}: t = ({got[0]:.12g}, {got[1]:.12g}), exact ({want[0]:.12g}, {want[1]:.12g})")
-        return "; ".join(bad[:3]) + (f" (and {len(bad) - 3} more)" if len(bad) > 3 else "") if bad else None
-    return [("both roots, smaller first, inf on a miss", roots)]
+def sphere_roots(params: dict) -> dict[str, np.ndarray]:
+    """Both roots of every ray, exactly (inf on a miss)."""
+    o, d = _vec(params, "origins"), _vec(params, "directions")
+    roots = np.array([sphere_exact(o[i], d[i], params["center"], params["radius"]) for i in range(len(o))]).reshape(-1, 2)
+    return {"t0": roots[:, 0], "t1": roots[:, 1]}
 
 
 def triangle_exact(o, d, v0, v1, v2) -> tuple[float, bool]:
@@ -138,67 +104,31 @@ def triangle_exact(o, d, v0, v1, v2) -> tuple[float, bool]:
     return float(t), (u == 0 or v == 0 or u + v == 1)
 
 
-def triangle_checks(rel: float = 1e-9) -> list:
-    def hits(out, p):
-        o, d = _vec(p, "origins"), _vec(p, "directions")
-        v = [np.broadcast_to(_vec(p, k), o.shape) for k in ("v0", "v1", "v2")]
-        bad = []
-        for i in range(len(o)):
-            want, edge = triangle_exact(o[i], d[i], v[0][i], v[1][i], v[2][i])
-            got = float(out["t"][i])
-            if edge:
-                continue  # exactly on an edge: either answer is right here (the watertight test checks edges)
-            if np.isinf(want) != np.isinf(got) or (not np.isinf(want) and abs(got - want) > rel * max(1.0, abs(want))):
-                bad.append(f"ray {i}: t = {got:.12g}, exact {want:.12g}")
-        return "; ".join(bad[:3]) + (f" (and {len(bad) - 3} more)" if len(bad) > 3 else "") if bad else None
-    return [("hits and misses against exact arithmetic", hits)]
-
-
-def watertight_checks() -> list:
-    """Rays through the shared edges and vertices of a fan: each ray is paired with every triangle."""
-    def no_gaps(out, p):
-        t = np.asarray(out["t"], float).reshape(p["rays"], p["triangles"])
-        leaks = int((~np.isfinite(t).any(axis=1)).sum())
-        if leaks:
-            return f"{leaks} of {p['rays']} rays through shared edges or vertices hit none of the triangles (a gap)"
-    return [("no ray slips between triangles", no_gaps)]
+def triangle_hits(params: dict) -> dict[str, np.ndarray]:
+    """Each ray's t on its triangle by exact arithmetic (inf: a miss), and whether it lies exactly on an edge."""
+    o, d = _vec(params, "origins"), _vec(params, "directions")
+    v = [np.broadcast_to(_vec(params, k), o.shape) for k in ("v0", "v1", "v2")]
+    hits = [triangle_exact(o[i], d[i], v[0][i], v[1][i], v[2][i]) for i in range(len(o))]
+    return {"t": np.array([t for t, _ in hits], float).reshape(-1), "edge": np.array([e for _, e in hits], bool).reshape(-1)}
 
 
 # --- W4 ----------------------------------------------------------------------------------------
 
-def bvh_checks(max_depth: int = 64) -> list:
-    def valid(out, p):
-        problems = raytrace.bvh_problems({k: out[k] for k in raytrace.BVH_KEYS}, out["box_lo"], out["box_hi"])
-        return "; ".join(problems[:3]) or None
+def hierarchy_boxes(params: dict) -> dict[str, np.ndarray]:
+    """The primitives' boxes the hierarchy is built over, and a plain median split's surface-area cost over them."""
+    if params.get("scene") is not None:
+        lo, hi = raytrace.build(parse_scene(params["scene"], "<truth scene>")).bounds()
+    else:
+        lo, hi = np.asarray(params["lo"], float).reshape(-1, 3), np.asarray(params["hi"], float).reshape(-1, 3)
+    return {"box_lo": lo, "box_hi": hi, "median_cost": np.array(sah_cost(*_median_bvh(lo, hi)))}
 
-    def root(out, p):
-        lo, hi = np.asarray(out["box_lo"]), np.asarray(out["box_hi"])
-        if not (np.allclose(out["lo"][0], lo.min(axis=0)) and np.allclose(out["hi"][0], hi.max(axis=0))):
-            return "node 0 must be the root, whose box is the union of all primitives' boxes"
 
-    def shallow(out, p):
-        if raytrace.bvh_problems({k: out[k] for k in raytrace.BVH_KEYS}, out["box_lo"], out["box_hi"]):
-            return "not a valid hierarchy (see above)"
-        depth = raytrace.bvh_depth({k: out[k] for k in raytrace.BVH_KEYS})
-        n = len(out["box_lo"])
-        if depth > max_depth:
-            return f"depth {depth} for {n} primitives (at most {max_depth}: split the boxes, do not peel them one by one)"
-
-    def tight(out, p):
-        """A good split keeps children's boxes small: the summed surface area of the leaves, against a median split's."""
-        if raytrace.bvh_problems({k: out[k] for k in raytrace.BVH_KEYS}, out["box_lo"], out["box_hi"]):
-            return "not a valid hierarchy (see above)"
-        def sah(lo, hi, child, start, count):
-            e = hi - lo
-            area = e[:, 0] * e[:, 1] + e[:, 1] * e[:, 2] + e[:, 2] * e[:, 0]
-            leaf = child < 0
-            return (area[~leaf].sum() + (area[leaf] * count[leaf]).sum()) / max(area[0], 1e-300)
-        got = sah(out["lo"], out["hi"], out["child"], out["start"], out["count"])
-        ref = sah(*_median_bvh(np.asarray(out["box_lo"]), np.asarray(out["box_hi"])))
-        if got > 1.5 * ref:
-            return f"surface-area cost {got:.1f}, more than 1.5× a plain median split's {ref:.1f}: rays will visit many nodes"
-
-    return [("a valid hierarchy", valid), ("node 0 is the root", root), ("depth", shallow), ("tight boxes", tight)]
+def sah_cost(lo, hi, child, start, count) -> float:
+    """Summed surface area of the inner nodes plus each leaf's times its primitives, over the root's."""
+    e = np.asarray(hi, float) - np.asarray(lo, float)
+    area = e[:, 0] * e[:, 1] + e[:, 1] * e[:, 2] + e[:, 2] * e[:, 0]
+    leaf = np.asarray(child) < 0
+    return float((area[~leaf].sum() + (area[leaf] * np.asarray(count)[leaf]).sum()) / max(area[0], 1e-300))
 
 
 def _median_bvh(lo: np.ndarray, hi: np.ndarray, leaf: int = 4):
@@ -257,48 +187,28 @@ def rasterised_depth(scene: dict, width: int, height: int) -> np.ndarray:
         renderer.delete()
 
 
-def depth_checks(rel: float = 5e-3, max_bad: float = 0.02) -> list:
-    def visibility(out, p):
-        w, h = p["size"]
-        # pyrender at 3× the resolution: each pixel's 3×3 sub-pixels span ±1/3 pixel around its centre (its
-        # multisampled depth is taken off the sample centre, so a range, not one value, is the truth)
-        sub = rasterised_depth(p["scene"], 3 * w, 3 * h).reshape(h, 3, w, 3).transpose(1, 3, 0, 2).reshape(9, -1)
-        raster = sub[4]
-        cam = p["scene"]["camera"]
-        t = np.asarray(out["t"], float)
-        hit = np.isfinite(t)
-        width, height = w, h
-        tan_y = np.tan(np.radians(cam["fovy"]) / 2)
-        x = (2 * (np.arange(width) + 0.5) / width - 1) * tan_y * width / height
-        y = (1 - 2 * (np.arange(height) + 0.5) / height) * tan_y
-        xx, yy = np.meshgrid(x, y, indexing="xy")
-        cos = 1 / np.sqrt(1 + xx.ravel() ** 2 + yy.ravel() ** 2)
-        depth = np.where(hit, t * cos, 0.0)
-        covered_any, empty_any = (sub > 0).any(axis=0), (sub == 0).any(axis=0)
-        lo = np.where(sub > 0, sub, np.inf).min(axis=0)
-        hi = np.where(sub > 0, sub, -np.inf).max(axis=0)
-        mismatch = (hit & ~covered_any) | (~hit & ~empty_any)
-        both = hit & covered_any
-        mismatch |= both & ((depth < lo * (1 - rel)) | (depth > hi * (1 + rel)))
-        frac = float(mismatch.mean())
-        if frac > max_bad:
-            k = int(np.argmax(mismatch))
-            return (f"{frac:.1%} of pixels disagree with pyrender's depth buffer (allowed {max_bad:.0%}); e.g. pixel "
-                    f"{k % w},{k // w}: your depth {depth[k]:.6g}, rasterised {raster[k]:.6g}")
+def depth_range(params: dict) -> dict[str, np.ndarray]:
+    """What primary visibility may be at each pixel, from pyrender's depth buffer at 3× the resolution.
 
-    def normals(out, p):
-        n = np.asarray(out["normals"], float)
-        hit = np.isfinite(np.asarray(out["t"], float))
-        length = np.linalg.norm(n[hit], axis=1)
-        if hit.any() and not np.allclose(length, 1.0, atol=1e-6):
-            return "normals at hits must be unit vectors"
-
-    return [("primary visibility matches a rasteriser", visibility), ("unit normals", normals)]
+    Each pixel's 3×3 sub-pixels span ±1/3 pixel around its centre (the rasteriser's depth is taken
+    off the sample centre, so a range, not one value, is the truth); ``cos`` turns a ray's t into
+    the depth along the view axis.
+    """
+    w, h = params["size"]
+    sub = rasterised_depth(params["scene"], 3 * w, 3 * h).reshape(h, 3, w, 3).transpose(1, 3, 0, 2).reshape(9, -1)
+    cam = params["scene"]["camera"]
+    tan_y = np.tan(np.radians(cam["fovy"]) / 2)
+    x = (2 * (np.arange(w) + 0.5) / w - 1) * tan_y * w / h
+    y = (1 - 2 * (np.arange(h) + 0.5) / h) * tan_y
+    xx, yy = np.meshgrid(x, y, indexing="xy")
+    return {"raster": sub[4], "covered_any": (sub > 0).any(axis=0), "empty_any": (sub == 0).any(axis=0),
+            "lo": np.where(sub > 0, sub, np.inf).min(axis=0), "hi": np.where(sub > 0, sub, -np.inf).max(axis=0),
+            "cos": 1 / np.sqrt(1 + xx.ravel() ** 2 + yy.ravel() ** 2)}
 
 
 # --- W6 ----------------------------------------------------------------------------------------
 
-def shading_truth(p: dict) -> np.ndarray:
+def shading(p: dict) -> np.ndarray:
     """Lambert plus Blinn-Phong, one point at a time, written from the formula with angles."""
     out = []
     for i in range(len(p["normals"])):
@@ -315,7 +225,7 @@ def shading_truth(p: dict) -> np.ndarray:
 
 # --- W7: a brute-force walk over every object ------------------------------------------------------
 
-def transmission_truth(p: dict) -> np.ndarray:
+def transmission(p: dict) -> np.ndarray:
     """Product of the transmittances crossed strictly between origin and target, object by object."""
     sc = parse_scene(p["scene"], "<truth scene>")
     o, x = _vec(p, "origins"), _vec(p, "targets")
@@ -349,7 +259,7 @@ def transmission_truth(p: dict) -> np.ndarray:
 
 # --- W8, W9, W10: trigonometric forms --------------------------------------------------------------
 
-def reflect_truth(p: dict) -> np.ndarray:
+def reflect(p: dict) -> np.ndarray:
     """Mirror each direction: keep its tangential part, flip its normal part (by angles, not by d − 2(d·n)n)."""
     out = []
     for d, n in zip(_vec(p, "directions"), _vec(p, "normals")):
@@ -360,7 +270,7 @@ def reflect_truth(p: dict) -> np.ndarray:
     return np.array(out)
 
 
-def refract_truth(p: dict) -> tuple[np.ndarray, np.ndarray]:
+def refract_angles(p: dict) -> tuple[np.ndarray, np.ndarray]:
     """Snell's law by angles: sin θt = η sin θi, in the plane of d and n."""
     d_all, n_all = _vec(p, "directions"), _vec(p, "normals")
     eta = np.broadcast_to(np.asarray(p["eta"], float), (len(d_all),))
@@ -380,27 +290,13 @@ def refract_truth(p: dict) -> tuple[np.ndarray, np.ndarray]:
     return np.array(dirs), np.array(tir)
 
 
-def refract_checks(atol: float = 1e-9) -> list:
-    def mask(out, p):
-        _, tir = refract_truth(p)
-        got = np.asarray(out["tir"], bool)
-        if not np.array_equal(got, tir):
-            i = int(np.argmax(got != tir))
-            return f"ray {i}: total internal reflection is {bool(got[i])}, expected {bool(tir[i])}"
-
-    def directions(out, p):
-        want, tir = refract_truth(p)
-        got = np.asarray(out["t"], float)
-        err = np.abs(got - want).max(axis=1)
-        err[tir] = 0
-        if err.max() > atol:
-            i = int(np.argmax(err))
-            return f"ray {i}: refracted direction {got[i].round(9).tolist()}, expected {want[i].round(9).tolist()}"
-
-    return [("total internal reflection", mask), ("refracted directions", directions)]
+def refract(p: dict) -> dict[str, np.ndarray]:
+    """Refracted directions (zero under total internal reflection) and the TIR mask."""
+    dirs, tir = refract_angles(p)
+    return {"t": dirs.reshape(-1, 3), "tir": tir.reshape(-1)}
 
 
-def fresnel_truth(p: dict) -> np.ndarray:
+def fresnel(p: dict) -> np.ndarray:
     """Fresnel's equations in their sine and tangent form: r_s = −sin(θi−θt)/sin(θi+θt), r_p = tan(θi−θt)/tan(θi+θt)."""
     cos_i = np.asarray(p["cos_i"], float)
     eta = np.broadcast_to(np.asarray(p["eta"], float), cos_i.shape)

@@ -1,9 +1,17 @@
-"""Grading a class: every submission in a folder, in parallel, into a gradebook CSV and one report each."""
+"""Grading a class: every submission in a folder, in parallel, into a gradebook CSV and one report each.
+
+Each submission is graded in a process of its own (one that crashes takes no
+classmate with it), in its own sandbox, with the roster folder and the output
+folder on the list of what no submission may read. Where the sandbox cannot give
+each test its own namespaces (the uid-only fallback, see :mod:`.sandbox`), one
+submission is graded at a time, so no two students' code ever runs together.
+"""
 from __future__ import annotations
 
 import csv
+import multiprocessing
 import os
-from concurrent.futures import ThreadPoolExecutor, as_completed
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 from ..errors import KitError
@@ -34,21 +42,19 @@ def grade_roster(*, stage: str, roster: str | Path, output: str | Path, include_
     bar = Progress(f"grading {len(subs)} submissions", len(subs), delay=0.0) if show_progress else None
     rows: dict[str, dict] = {}
 
-    def one(sub: Path) -> dict:
-        folder = output / sub.name
-        try:
-            result = grade(stage, sub, include_hidden=include_hidden, show_progress=False, jobs=1)
-        except Exception as err:  # one broken submission (or folder) never stops the batch
-            write_failure(folder / "results.json", f"{type(err).__name__}: {err}")
-            return {"student": sub.name, "score": 0, "max_score": "", "seconds": "", "problems": str(err)}
-        write_results(folder / "results.json", result)
-        write_report(folder, result)
-        return _row(sub.name, result, tasks)
-
-    workers = parallel or max(1, (os.cpu_count() or 1))
-    with ThreadPoolExecutor(max_workers=workers) as pool:
-        for future in as_completed([pool.submit(one, s) for s in subs]):
-            row = future.result()
+    protected = (roster.resolve(), output.resolve())
+    workers = 1 if not _namespaces_available() else (parallel or max(1, (os.cpu_count() or 1)))
+    context = multiprocessing.get_context("fork" if hasattr(os, "fork") else "spawn")
+    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+        futures = {pool.submit(_grade_one, stage, sub, output / sub.name, include_hidden, tasks, protected): sub
+                   for sub in subs}
+        for future in as_completed(futures):
+            sub = futures[future]
+            try:
+                row = future.result()
+            except Exception as err:  # the student's grader process itself died: a row all the same
+                write_failure(output / sub.name / "results.json", f"{type(err).__name__}: {err}")
+                row = {"student": sub.name, "score": 0, "max_score": "", "seconds": "", "problems": str(err)}
             rows[row["student"]] = row
             if bar:
                 bar.advance(note=row["student"])
@@ -59,8 +65,33 @@ def grade_roster(*, stage: str, roster: str | Path, output: str | Path, include_
         writer = csv.DictWriter(f, fieldnames=["student", "score", "max_score", *tasks, "seconds", "problems"])
         writer.writeheader()
         for name in sorted(rows):
-            writer.writerow(rows[name])
+            writer.writerow({k: spreadsheet_safe(v) for k, v in rows[name].items()})
     return path
+
+
+def spreadsheet_safe(value):
+    """A cell a spreadsheet shows as text: a leading = + - @ (a formula) is quoted with an apostrophe."""
+    if isinstance(value, str) and value[:1] in ("=", "+", "-", "@", "\t", "\r"):
+        return "'" + value
+    return value
+
+
+def _namespaces_available() -> bool:
+    from .sandbox import namespaces_work
+    return namespaces_work()
+
+
+def _grade_one(stage: str, sub: Path, folder: Path, include_hidden: bool, tasks: list[str],
+               protected: tuple[Path, ...]) -> dict:
+    """In a grading process of its own: one submission's results, report and gradebook row."""
+    try:
+        result = grade(stage, sub, include_hidden=include_hidden, show_progress=False, jobs=1, protected=protected)
+    except Exception as err:  # one broken submission (or folder) never stops the batch
+        write_failure(folder / "results.json", f"{type(err).__name__}: {err}")
+        return {"student": sub.name, "score": 0, "max_score": "", "seconds": "", "problems": str(err)}
+    write_results(folder / "results.json", result)
+    write_report(folder, result)
+    return _row(sub.name, result, tasks)
 
 
 def _row(name: str, result: GradeResult, tasks: list[str]) -> dict:

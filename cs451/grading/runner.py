@@ -1,35 +1,42 @@
-"""The grader side: run each test's probe on the submission in a subprocess and judge what comes back.
+"""The grader side: run each test's probe on the submission in the sandbox and judge what comes back.
 
-Student code never runs in this process. The truth for a test comes from a
-closed form or library in the spec, or from the reference running the same
-probe (in a worker too, cached on disk so a class of hundreds renders each
-reference image once).
+Student code never runs in this process. A submission is first copied as
+hostile data (:mod:`.staging`), then every test runs in a fresh worker inside
+one :class:`~.sandbox.Sandbox`; what the worker leaves is read as hostile data
+(:mod:`.untrusted`), and each check runs with its own time and memory limit
+(:mod:`.guard`), so a bad answer fails its test and never the run. The truth for
+a test comes from the reference running the same probe (cached), from a truth
+function, or both (:mod:`.expected`).
 """
 from __future__ import annotations
 
-import hashlib
-import importlib
 import json
 import os
-import signal
 import sys
 import tempfile
 import time
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
+from concurrent.futures import ThreadPoolExecutor, as_completed
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 import numpy as np
 
 from .. import KIT_ROOT
-from ..errors import KitError
+from ..errors import KitError, SubmissionError
 from ..impl import resolve_impl
 from ..progress import Progress
 from ..stages import get_stage
 from . import sandbox
-from .spec import Outputs, Test, Verdict
+from .expected import ReferenceAnswers, TruthValues, expected_for, is_student_copy
+from .guard import CheckFailed, GuardError, run_guarded
+from .loader import hidden_summary, load_tests
+from .spec import CHECK_MODULES, Outputs, Test, Verdict
+from .untrusted import UntrustedError, read_arrays, read_status, signal_name
+
+#: The word that grades the kit's own reference without the sandbox; no path, however it resolves, does.
+TRUSTED = "reference"
+
 
 @dataclass
 class ProbeResult:
@@ -40,159 +47,78 @@ class ProbeResult:
     seconds: float
 
 
-def _read_outputs(job: Path) -> tuple[bool, Outputs, str]:
-    """Read the worker's answer as untrusted data: JSON status, arrays without pickles."""
+def _interpret(done: sandbox.Completed, job: Path, timeout: float, seconds: float) -> ProbeResult:
+    """What a finished worker means, from its exit and the files it left (read as hostile data)."""
+    if done.timed_out:
+        return ProbeResult(False, {}, f"took longer than the {timeout:g} s limit (an infinite loop?)", done.output, seconds)
+    if done.out_of_memory:
+        return ProbeResult(False, {}, f"the submission ran out of memory (everything it started may use "
+                                      f"{sandbox.SUBMISSION_MEMORY >> 20} MiB together)", done.output, seconds)
     try:
-        status = json.loads((job / "status.json").read_text())
-        ok, error = bool(status.get("ok")), str(status.get("error", ""))[:2000]
-    except (OSError, ValueError, AttributeError):
-        return False, {}, "the submission stopped before finishing this test (it crashed, exited or was killed)"
-    if not ok:
-        return False, {}, error
-    try:
-        with np.load(job / "output.npz", allow_pickle=False) as data:
-            return True, {k: data[k] for k in data.files}, ""
-    except Exception as err:  # a corrupt or forged file is the submission's failure, not the grader's
-        return False, {}, f"the answer could not be read ({type(err).__name__})"
+        ok, error = read_status(job / "status.json")
+        outputs = read_arrays(job / "output.npz") if ok else {}
+    except UntrustedError as err:
+        if "status.json is missing" in str(err):
+            error = "the submission stopped before finishing this test (it crashed, exited or was killed)"
+        else:
+            error = f"the answer could not be read: {err}"
+        ok, outputs = False, {}
+    sig = signal_name(done.returncode)
+    if not ok and sig:
+        reason = {"SIGXCPU": "it used more CPU time than allowed", "SIGXFSZ": "it wrote more output than allowed",
+                  "SIGKILL": "it was killed (out of memory?)", "SIGSEGV": "it crashed (segmentation fault)"}
+        error = f"the submission stopped: {reason.get(sig, sig)}"
+    elif not ok and "MemoryError" in error:
+        error += f" (the limit is {sandbox.MEMORY_LIMIT >> 30} GiB)"
+    return ProbeResult(ok, outputs, error or "failed without a message", done.output, seconds)
 
 
-def run_probe(stage: str, impl_dir: Path, probe: str, params: dict[str, Any],
-              inputs: Outputs | None = None, timeout: float = 60.0, trusted: bool = False,
-              drop_privileges: bool = True) -> ProbeResult:
-    """Run one probe on an implementation in a fresh sandboxed subprocess (see :mod:`.sandbox`)."""
+def _write_request(job: Path, stage: str, impl: str, probe: str, params: dict[str, Any], inputs: Outputs | None) -> None:
+    (job / "request.json").write_text(json.dumps({"stage": stage, "impl": impl, "probe": probe, "params": params}))
+    if inputs:
+        np.savez(job / "inputs.npz", **inputs)
+
+
+def run_trusted_probe(stage: str, impl_dir: Path, probe: str, params: dict[str, Any],
+                      inputs: Outputs | None = None, timeout: float = 300.0) -> ProbeResult:
+    """Run one probe on the kit's own reference in a plain subprocess (trusted: no sandbox)."""
     start = time.perf_counter()
-    with tempfile.TemporaryDirectory(prefix="cs451-") as tmp:
+    with tempfile.TemporaryDirectory(prefix="cs451-trusted-") as tmp:
         job = Path(tmp) / "job"
         job.mkdir()
-        (job / "request.json").write_text(json.dumps({"stage": stage, "impl": str(impl_dir), "probe": probe,
-                                                      "params": params}))
-        if inputs:
-            np.savez(job / "inputs.npz", **inputs)
-        done = sandbox.run_untrusted([sys.executable, "-m", "cs451.grading.worker", str(job)], job,
-                                     sandbox.Limits(wall_seconds=timeout), trusted=trusted,
-                                     drop_privileges=drop_privileges)
-        seconds = time.perf_counter() - start
-        if done.timed_out:
-            return ProbeResult(False, {}, f"took longer than the {timeout:g} s limit (an infinite loop?)", done.output, seconds)
-        ok, outputs, error = _read_outputs(job)
-        if not ok and done.returncode is not None and done.returncode < 0:
-            sig = signal.Signals(-done.returncode).name
-            reason = {"SIGXCPU": "it used more CPU time than allowed", "SIGXFSZ": "it wrote more output than allowed",
-                      "SIGKILL": "it was killed (out of memory?)", "SIGSEGV": "it crashed (segmentation fault)"}
-            error = f"the submission stopped: {reason.get(sig, sig)}"
-        elif not ok and "MemoryError" in error:
-            error += f" (the limit is {sandbox.MEMORY_LIMIT >> 30} GiB)"
-        return ProbeResult(ok, outputs, error or "failed without a message", done.output, seconds)
+        _write_request(job, stage, str(impl_dir), probe, params, inputs)
+        done = sandbox.run_trusted([sys.executable, "-m", "cs451.grading.worker", str(job)], job,
+                                   sandbox.Limits(wall_seconds=timeout), engine=KIT_ROOT)
+        return _interpret(done, job, timeout, time.perf_counter() - start)
 
 
-# --- reference answers, cached ------------------------------------------------
+class _SandboxedProbes:
+    """Probes on a staged submission, one fresh worker per call."""
 
-def _tree_hash(*folders: Path) -> str:
-    """A version of the code that answers probes; independent of where the tree lives, so answers
-    computed when an autograder is built stay valid where it is unpacked."""
-    h = hashlib.sha256()
-    for folder in folders:
-        for path in sorted(folder.rglob("*.py")):
-            if "__pycache__" not in path.parts:
-                h.update(path.relative_to(folder).as_posix().encode())
-                h.update(path.read_bytes())
-    return h.hexdigest()[:16]
+    def __init__(self, box: sandbox.Sandbox, stage: str, impl: str):
+        self.box, self.stage, self.impl = box, stage, impl
 
-
-def answer_key(probe: str, params: dict[str, Any], inputs: Outputs | None = None) -> str:
-    """The file name of the answer to a probe: the same in the cache and in a student copy's packaged answers."""
-    key = hashlib.sha256(json.dumps([probe, params, sorted(inputs or {})], sort_keys=True).encode()).hexdigest()[:20]
-    return f"{probe}-{key}.npz"
+    def run(self, probe: str, params: dict[str, Any], inputs: Outputs | None, timeout: float) -> ProbeResult:
+        start = time.perf_counter()
+        job = self.box.new_job()
+        try:
+            _write_request(job, self.stage, self.impl, probe, params, inputs)
+            done = self.box.run(self.box.worker_args(job), job, sandbox.Limits(wall_seconds=timeout))
+            return _interpret(done, job, timeout, time.perf_counter() - start)
+        finally:
+            self.box.finish_job(job)
 
 
-def packaged_answers_dir(stage: str) -> Path:
-    """Where a student copy (without reference/) keeps the reference's answers to the public tests."""
-    return KIT_ROOT / "autograder" / stage / "answers"
+class _TrustedProbes:
+    def __init__(self, stage: str, impl: Path):
+        self.stage, self.impl = stage, impl
+
+    def run(self, probe: str, params: dict[str, Any], inputs: Outputs | None, timeout: float) -> ProbeResult:
+        return run_trusted_probe(self.stage, self.impl, probe, params, inputs, timeout)
 
 
-class ReferenceAnswers:
-    """The reference's answers to probes, computed once in a worker and kept on disk.
-
-    In a student copy there is no reference/: the answers to the public tests ship
-    in ``autograder/<stage>/answers/`` instead (written by ``cs451 release``).
-    """
-
-    def __init__(self, stage: str, cache_dir: Path | None = None):
-        self.stage = stage
-        if not (KIT_ROOT / "reference" / stage).is_dir() and packaged_answers_dir(stage).is_dir():
-            self.impl = None
-            self.dir = packaged_answers_dir(stage)
-            return
-        self.impl = resolve_impl("reference", stage)
-        version = _tree_hash(self.impl, KIT_ROOT / "cs451")
-        self.dir = (cache_dir or KIT_ROOT / ".cs451-cache") / "reference" / stage / version
-        self.dir.mkdir(parents=True, exist_ok=True)
-
-    def path(self, probe: str, params: dict[str, Any], inputs: Outputs | None = None) -> Path:
-        return self.dir / answer_key(probe, params, inputs)
-
-    def get(self, probe: str, params: dict[str, Any], inputs: Outputs | None = None) -> Outputs:
-        path = self.path(probe, params, inputs)
-        if path.exists():
-            with np.load(path, allow_pickle=False) as data:
-                return {k: data[k] for k in data.files}
-        if self.impl is None:
-            raise KitError(f"this copy of the kit has no reference answer for probe {probe!r} "
-                           f"(its answers in {self.dir} are older than the test; ask for an updated copy)")
-        result = run_probe(self.stage, self.impl, probe, params, inputs, timeout=300, trusted=True)
-        if not result.ok:
-            raise KitError(f"the reference failed on probe {probe} {params}: {result.error}\n{result.output}")
-        np.savez(path.with_suffix(".tmp.npz"), **result.outputs)
-        os.replace(path.with_suffix(".tmp.npz"), path)
-        return result.outputs
-
-
-# --- loading specs --------------------------------------------------------------
-
-def _load_spec_module(stage: str, name: str) -> ModuleType | None:
-    """Import autograder/<stage>/<name>.py in the grader's process (specs import each other as ``autograder.*``)."""
-    if not (KIT_ROOT / "autograder" / stage / f"{name}.py").exists():
-        return None
-    if str(KIT_ROOT) not in sys.path:
-        sys.path.insert(0, str(KIT_ROOT))
-    return importlib.import_module(f"autograder.{stage}.{name}")
-
-
-def hidden_summary(stage: str) -> dict[str, Any]:
-    """How many hidden tests there are and what they are worth, without what they check.
-
-    From hidden.py where it exists (the instructor's copy), else from the summary
-    a student copy ships (``autograder/<stage>/hidden.json``, written by ``cs451 release``).
-    """
-    hidden = _load_spec_module(stage, "hidden")
-    if hidden is not None:
-        by_task: dict[str, float] = {}
-        for t in hidden.TESTS:
-            by_task[t.task] = by_task.get(t.task, 0.0) + t.points
-        return {"count": len(hidden.TESTS), "points": sum(by_task.values()), "by_task": by_task}
-    path = KIT_ROOT / "autograder" / stage / "hidden.json"
-    if path.exists():
-        return json.loads(path.read_text())
-    return {"count": 0, "points": 0.0, "by_task": {}}
-
-
-def load_tests(stage: str, include_hidden: bool = True) -> list[Test]:
-    """The stage's tests in rubric order, numbered per task (S1.1, S1.2, …)."""
-    public = _load_spec_module(stage, "public")
-    if public is None:
-        raise KitError(f"no autograder tests for stage {stage!r} (expected autograder/{stage}/public.py)")
-    tests = list(public.TESTS)
-    hidden = _load_spec_module(stage, "hidden") if include_hidden else None
-    if hidden is not None:
-        tests += [t for t in hidden.TESTS]
-    order = [t.id for t in get_stage(stage).tasks]
-    tests.sort(key=lambda t: (order.index(t.task), t.hidden))
-    counts: dict[str, int] = {}
-    numbered = []
-    for t in tests:
-        counts[t.task] = counts.get(t.task, 0) + 1
-        numbered.append(Test(**{**t.__dict__, "number": f"{t.task}.{counts[t.task]}"}))
-    return numbered
+def _reference_runner(stage: str, probe: str, params: dict[str, Any], inputs: Outputs | None) -> ProbeResult:
+    return run_trusted_probe(stage, resolve_impl(TRUSTED, stage), probe, params, inputs, timeout=300)
 
 
 # --- grading ------------------------------------------------------------------------
@@ -225,75 +151,141 @@ class GradeResult:
         return sum(r.test.points for r in self.results)
 
 
-def _run_test(test: Test, stage: str, impl_dir: Path, reference: ReferenceAnswers, drop: bool,
-              deadline: float) -> TestResult:
-    remaining = deadline - time.perf_counter()
-    if remaining <= 1:
-        return TestResult(test, 0.0, Verdict(0.0, "not run: the time limit for the whole submission was reached"))
+def _judge(test: Test, outputs: Outputs, expected: Outputs) -> Verdict:
+    """In the guarded child: the test's check on the answer."""
+    return test.check.resolve(CHECK_MODULES)(outputs, expected, test.params, **test.check.kwargs)
+
+
+def _verdict(test: Test, result: ProbeResult, expected: Outputs) -> Verdict:
     try:
-        given = reference.get(test.given, test.params) if test.given else None
-        expected = reference.get(test.probe, test.params, given) if test.expected == "reference" else None
-    except KitError as err:
-        return TestResult(test, 0.0, Verdict(0.0, f"grader error, not your fault: {err}"))
-    result = run_probe(stage, impl_dir, test.probe, test.params, given, timeout=min(test.timeout, remaining),
-                       drop_privileges=drop)
-    if not result.ok:
-        return TestResult(test, 0.0, Verdict(0.0, result.error), result.output, result.seconds)
-    try:
-        verdict = test.check(result.outputs, expected, test.params)
-    except Exception as err:  # a malformed answer the check did not foresee is the submission's, not a crash
-        verdict = Verdict(0.0, f"the answer has the wrong form ({type(err).__name__}: {err})")
+        verdict = run_guarded(_judge, test, result.outputs, expected)
+    except CheckFailed as err:  # a malformed answer the check did not foresee is the submission's, not a crash
+        verdict = Verdict(0.0, f"the answer has the wrong form ({err})")
+    except GuardError as err:
+        verdict = Verdict(0.0, f"the answer could not be checked: {err}")
+    if not isinstance(verdict, Verdict):
+        raise KitError(f"{test.name}: its check returned {type(verdict).__name__}, not a Verdict")
+    return verdict
+
+
+def _score(test: Test, verdict: Verdict) -> float:
     fraction = min(max(float(np.nan_to_num(verdict.fraction)), 0.0), 1.0)
-    return TestResult(test, round(test.points * fraction, 4), verdict, result.output, result.seconds)
+    return round(test.points * fraction, 4)
+
+
+def protected_paths(extra: tuple[Path, ...] = ()) -> list[Path]:
+    """What no submission may read: the kit's reference, specs, tests, history and cached answers, and ``extra``."""
+    names = ("reference", "autograder", "starter", "tests", "bench", ".git", ".cs451-cache", "assignments")
+    return [KIT_ROOT / n for n in names] + list(extra)
+
+
+def engine_sources(stage: str) -> list[tuple[Path, str]]:
+    """What the worker imports: the engine, and the references of the earlier stages this one builds on."""
+    sources = [(KIT_ROOT / "cs451", "cs451")]
+    for earlier in get_stage(stage).builds_on:
+        folder = KIT_ROOT / "reference" / earlier
+        if folder.is_dir():
+            sources.append((folder, f"reference/{earlier}"))
+    return sources
+
+
+def _problems(outputs: Outputs) -> list[str]:
+    raw = outputs.get("problems")
+    if raw is None:
+        return []
+    arr = np.asarray(raw)
+    if arr.dtype.kind != "U" or arr.ndim != 1:
+        return ["the submission's interface could not be read"]
+    return [str(p)[:300] for p in arr[:50]]
 
 
 def grade(stage: str, submission: str | Path, include_hidden: bool = True, show_progress: bool = True,
           jobs: int | None = None, total_timeout: float = 600.0, tasks: list[str] | None = None,
-          test_timeout: float | None = None) -> GradeResult:
+          test_timeout: float | None = None, protected: tuple[Path, ...] = (),
+          submission_memory: int | None = None) -> GradeResult:
     """Grade one submission of a stage; never raises for anything the submission does.
 
-    ``tasks`` keeps only those tasks' tests; ``test_timeout`` overrides every test's time limit.
+    ``submission``: the word ``reference`` (the kit's own, trusted), ``starter``, or a folder;
+    ``tasks`` keeps only those tasks' tests; ``test_timeout`` overrides every test's time limit;
+    ``protected`` adds paths the sandbox must hide (a roster's other submissions, its output).
+    Raises ``KitError`` when the submission cannot be isolated here (it is then not run).
     """
     start = time.perf_counter()
-    deadline = start + total_timeout
     get_stage(stage)
     tests = [t for t in load_tests(stage, include_hidden) if tasks is None or t.task in tasks]
     if test_timeout is not None:
-        tests = [Test(**{**t.__dict__, "timeout": test_timeout}) for t in tests]
-    impl_dir = resolve_impl(submission, stage)
+        tests = [replace(t, timeout=test_timeout) for t in tests]
     out = GradeResult(stage, str(submission))
     if not include_hidden:
         out.hidden_not_run = hidden_summary(stage)
-    reference = ReferenceAnswers(stage)
-    problem = sandbox.isolation_problem(impl_dir)
-    if impl_dir.resolve().is_relative_to((KIT_ROOT / "reference").resolve()):
-        problem = "grading the reference itself, a self-test: the files it would be locked out of are its own"
-    drop = sandbox.is_root() and problem is None
-    if drop:  # the worker's user must not read the reference, the hidden tests or the cached answers
-        sandbox.protect(KIT_ROOT / "reference", KIT_ROOT / "autograder", reference.dir.parent.parent)
-        out.isolation = f"each test in a subprocess as '{sandbox.UNPRIVILEGED_USER}', with time, memory, CPU, file and process limits"
-    elif problem:
-        out.isolation = f"each test in a subprocess with limits, as the grader's user ({problem})"
-    else:
-        out.isolation = "each test in a subprocess with time, memory, CPU, file and process limits"
-    probe = run_probe(stage, impl_dir, "__interface__", {}, timeout=60, drop_privileges=drop)
-    if not probe.ok:  # the submission does not even import: every test gets the same reason
-        out.problems = [probe.error]
-        out.results = [TestResult(t, 0.0, Verdict(0.0, f"not run: {probe.error}"), probe.output) for t in tests]
+    reference = ReferenceAnswers(stage, run_reference=_reference_runner)
+    truths = TruthValues(stage)
+    if str(submission) == TRUSTED:
+        out.isolation = "the kit's own reference (trusted): each test in a plain subprocess with limits"
+        probes = _TrustedProbes(stage, resolve_impl(TRUSTED, stage))
+        _grade_tests(out, tests, probes, reference, truths, start + total_timeout, jobs, show_progress)
         out.seconds = time.perf_counter() - start
         return out
-    out.problems = [str(p) for p in probe.outputs.get("problems", [])]
-    bar = Progress(f"grading {stage}", len(tests)) if show_progress else None
+    upload = KIT_ROOT / "starter" if str(submission) == "starter" else Path(submission).expanduser()
+    box = sandbox.Sandbox(stage, upload, engine_sources(stage), protected_paths(tuple(protected)),
+                          student_copy=is_student_copy(stage),
+                          submission_memory=submission_memory or sandbox.SUBMISSION_MEMORY)
+    with box:
+        staged_root = box.run_dir / "upload"
+        try:
+            impl = resolve_impl(staged_root, stage)
+        except SubmissionError as err:
+            raise SubmissionError(str(err).replace(str(staged_root), str(upload))) from None
+        out.isolation = box.describe()
+        if box.staged.note():
+            out.problems.append(box.staged.note())
+        probes = _SandboxedProbes(box, stage, box.visible(impl))
+        _grade_tests(out, tests, probes, reference, truths, start + total_timeout,
+                     jobs if box.parallel else 1, show_progress)
+    out.seconds = time.perf_counter() - start
+    return out
+
+
+def _grade_tests(out: GradeResult, tests: list[Test], probes: Any, reference: ReferenceAnswers, truths: TruthValues,
+                 deadline: float, jobs: int | None, show_progress: bool) -> None:
+    """The interface probe, then every test: workers in parallel threads, checks here, one at a time."""
+    probe = probes.run("__interface__", {}, None, 60.0)
+    if not probe.ok:  # the submission does not even import: every test gets the same reason
+        out.problems.append(probe.error)
+        out.results = [TestResult(t, 0.0, Verdict(0.0, f"not run: {probe.error}"), probe.output) for t in tests]
+        return
+    out.problems += _problems(probe.outputs)
+    prepared: dict[int, tuple[Outputs | None, Outputs] | TestResult] = {}
+    for i, t in enumerate(tests):  # trusted answers first: the reference's runs are not charged to the submission
+        try:
+            prepared[i] = expected_for(t, reference, truths)
+        except KitError as err:
+            prepared[i] = TestResult(t, 0.0, Verdict(0.0, f"grader error, not your fault: {err}"))
+
+    def work(i: int) -> ProbeResult | TestResult:
+        if isinstance(prepared[i], TestResult):
+            return prepared[i]
+        remaining = deadline - time.perf_counter()
+        if remaining <= 1:
+            return TestResult(tests[i], 0.0, Verdict(0.0, "not run: the time limit for the whole submission was reached"))
+        return probes.run(tests[i].probe, tests[i].params, prepared[i][0], min(tests[i].timeout, remaining))
+
+    bar = Progress(f"grading {out.stage}", len(tests)) if show_progress else None
     results: dict[int, TestResult] = {}
-    with ThreadPoolExecutor(max_workers=jobs or min(2, os.cpu_count() or 1)) as pool:
-        futures = {pool.submit(_run_test, t, stage, impl_dir, reference, drop, deadline): i
-                   for i, t in enumerate(tests)}
-        for future in futures:
-            results[futures[future]] = future.result()
+    with ThreadPoolExecutor(max_workers=max(1, jobs or min(2, os.cpu_count() or 1))) as pool:
+        futures = {pool.submit(work, i): i for i in range(len(tests))}
+        for future in as_completed(futures):
+            i = futures[future]
+            done = future.result()
+            if isinstance(done, TestResult):
+                results[i] = done
+            elif not done.ok:
+                results[i] = TestResult(tests[i], 0.0, Verdict(0.0, done.error), done.output, done.seconds)
+            else:
+                verdict = _verdict(tests[i], done, prepared[i][1])
+                results[i] = TestResult(tests[i], _score(tests[i], verdict), verdict, done.output, done.seconds)
             if bar:
-                bar.advance(note=tests[futures[future]].number)
+                bar.advance(note=tests[i].number)
     if bar:
         bar.close()
     out.results = [results[i] for i in range(len(tests))]
-    out.seconds = time.perf_counter() - start
-    return out

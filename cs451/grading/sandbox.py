@@ -1,86 +1,75 @@
-"""Running untrusted student code: a subprocess with limits, as an unprivileged user when we are root.
+"""Running untrusted student code: one sandbox per grading run, one fresh worker per test.
 
-What it enforces, and where:
-- always: its own process group (killed whole on time-out), a wall-clock limit, CPU time,
-  address space, file size, no core dumps, a cap on processes (fork bombs), stdin closed,
-  a scrubbed environment;
-- when the grader runs as root (Gradescope, a Docker grader): the worker drops to the
-  ``nobody`` user, so files the grader keeps at mode 0700 (the reference, hidden tests,
-  cached reference answers, the results folder) cannot be read or written; and it gets a
-  fresh network namespace with no interfaces where the kernel allows it.
-Run locally as a normal user (a student's self-check), only the first list applies.
+A submission is hostile: it may read anything its user can (the kit's ``.git``,
+the reference, the answer cache, a classmate's folder), leave daemons behind,
+fork children that together hold gigabytes, or leave data in a shared temporary
+folder for the next test. The sandbox therefore fails closed:
+
+- it copies the engine, the earlier stages' references the stage builds on, and
+  the staged upload into a private run folder; the worker sees only those
+  (read-only), its own job folder and a private ``/tmp``;
+- ``bubblewrap`` (private mount, pid, network, IPC and UTS namespaces) where it
+  works, under a throwaway uid per test when the grader is root; else, as root,
+  the throwaway uid alone, with the kit's secrets checked unreadable first;
+  else (not root, no namespaces) it refuses, unless this is a student copy of
+  the kit, which holds nothing the sandbox protects;
+- before the first test a canary runs exactly as a test would and must find
+  every protected path unreadable, or grading stops and says why;
+- every test gets time, CPU, address-space, file-size and output limits, a
+  cgroup capping the memory and processes of everything it starts (or, where
+  cgroups cannot be made, a watchdog that sums them), and afterwards every
+  process it left is killed and every file it left is removed.
+
+Only the literal word ``reference`` runs without the sandbox (``run_trusted``).
 """
 from __future__ import annotations
 
 import ctypes
+import json
 import os
-import pwd
-import resource
+import random
+import shutil
 import signal
 import subprocess
 import sys
-from dataclasses import dataclass
+import tempfile
+import threading
+import time
+from dataclasses import dataclass, field
 from pathlib import Path
 
-MEMORY_LIMIT = 3 << 30       # bytes of address space (llvmpipe reserves generously; a numpy bomb stops here)
-FILE_LIMIT = 256 << 20       # largest file a worker may write
-PROCESS_ALLOWANCE = 64       # processes and threads beyond what the user already runs (llvmpipe uses one per core)
-OUTPUT_LIMIT = 4000          # characters of printed output kept
+try:  # not on Windows: there the student copy runs without limits (nothing to protect)
+    import resource
+except ImportError:  # pragma: no cover
+    resource = None  # type: ignore[assignment]
+
+from ..errors import KitError
+from . import cgroups
+from .staging import StagedUpload, stage_upload
+
+MEMORY_LIMIT = 3 << 30         # bytes of address space per process (llvmpipe reserves generously)
+SUBMISSION_MEMORY = 1 << 30    # bytes of memory for everything one test starts, together
+FILE_LIMIT = 256 << 20         # largest file a worker may write
+PROCESS_ALLOWANCE = 64         # processes and threads a test may run (llvmpipe uses one per core)
+OUTPUT_LIMIT = 4000            # characters of printed output kept
 CLONE_NEWNET = 0x40000000
-UNPRIVILEGED_USER = "nobody"
+UID_RANGE = (2_000_000_000, 2_100_000_000)   # throwaway uids: far above any real account
+CANARY_SECONDS = 30.0
+
+#: How each mode is described in results and reports.
+DESCRIPTIONS = {
+    "bubblewrap": "bubblewrap (private mount, pid, network and IPC namespaces)",
+    "uid": "a throwaway user per test, with the kit's files checked unreadable first",
+    "none": "no isolation (a student copy of the kit: your own code runs as you)",
+}
+
+
+class IsolationError(KitError):
+    """The sandbox cannot be set up as required here: grading must not go on (the message says why)."""
 
 
 def is_root() -> bool:
-    return os.geteuid() == 0
-
-
-def unprivileged_ids() -> tuple[int, int] | None:
-    """The uid and gid the worker runs as when we are root (None when we are not root)."""
-    if not is_root():
-        return None
-    try:
-        entry = pwd.getpwnam(UNPRIVILEGED_USER)
-        return entry.pw_uid, entry.pw_gid
-    except KeyError:
-        return 65534, 65534
-
-
-def _reachable_by_others(path: Path) -> bool:
-    """Whether a user who is neither owner nor in the group can read ``path`` (and traverse its parents)."""
-    path = path.resolve()
-    for folder in [*reversed(path.parents), path]:
-        try:
-            mode = folder.stat().st_mode
-        except OSError:
-            return False
-        if folder.is_dir() and not mode & 0o001:
-            return False
-    return bool(path.stat().st_mode & 0o004)
-
-
-def isolation_problem(impl_dir: Path) -> str | None:
-    """Why the worker cannot run as the unprivileged user here (None when it can, or when we are not root)."""
-    if not is_root():
-        return None
-    import cs451
-    needed = [Path(sys.executable), Path(sys.base_prefix) / "lib", Path(cs451.__file__).parent, impl_dir]
-    for path in needed:
-        if not _reachable_by_others(path):
-            return f"{UNPRIVILEGED_USER} cannot read {path}"
-    return None
-
-
-def _count_processes(uid: int) -> int:
-    count = 0
-    for status in Path("/proc").glob("[0-9]*/status"):
-        try:
-            for line in status.read_text().splitlines():
-                if line.startswith("Uid:"):
-                    count += int(line.split()[1]) == uid
-                    break
-        except OSError:
-            continue
-    return count
+    return hasattr(os, "geteuid") and os.geteuid() == 0
 
 
 @dataclass(frozen=True)
@@ -88,9 +77,36 @@ class Limits:
     wall_seconds: float
     memory_bytes: int = MEMORY_LIMIT
     file_bytes: int = FILE_LIMIT
+    submission_memory: int = SUBMISSION_MEMORY
 
 
-def _preexec(limits: Limits, ids: tuple[int, int] | None, nproc: int) -> None:  # runs in the child, before exec
+@dataclass
+class Completed:
+    returncode: int | None
+    output: str
+    timed_out: bool
+    out_of_memory: bool = False
+    peak_memory: int = 0          # bytes, where a cgroup or the watchdog measured it
+
+
+def worker_env(home: str, engine: str) -> dict[str, str]:
+    """Only what GL and Python need; nothing of the grader's (tokens, paths to the reference)."""
+    keep = ("PATH", "LANG", "LC_ALL", "DISPLAY", "LD_LIBRARY_PATH", "EGL_PLATFORM", "LIBGL_ALWAYS_SOFTWARE",
+            "GALLIUM_DRIVER", "LP_NUM_THREADS", "__EGL_VENDOR_LIBRARY_FILENAMES", "MESA_SHADER_CACHE_DISABLE")
+    env = {k: os.environ[k] for k in keep if k in os.environ}
+    env.setdefault("PATH", "/usr/bin:/bin")
+    env.setdefault("EGL_PLATFORM", "surfaceless")
+    env.update(HOME=home, TMPDIR=home, PYTHONDONTWRITEBYTECODE="1", PYTHONHASHSEED="0", PYTHONNOUSERSITE="1",
+               PYTHONPATH=engine, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MESA_SHADER_CACHE_DISABLE="true",
+               NUMBA_CACHE_DIR=home)
+    return env
+
+
+# --- the pieces a child runs before exec ------------------------------------------------
+
+def _set_limits(limits: Limits) -> None:
+    if resource is None:
+        return
     cpu = int(limits.wall_seconds * 2) + 5
     resource.setrlimit(resource.RLIMIT_CPU, (cpu, cpu + 5))
     resource.setrlimit(resource.RLIMIT_AS, (limits.memory_bytes, limits.memory_bytes))
@@ -101,81 +117,490 @@ def _preexec(limits: Limits, ids: tuple[int, int] | None, nproc: int) -> None:  
             f.write("1000")
     except OSError:
         pass
-    if ids is not None:
-        try:  # no network: a new, empty network namespace (needs CAP_SYS_ADMIN; skipped where refused)
-            ctypes.CDLL(None, use_errno=True).unshare(CLONE_NEWNET)
-        except Exception:
-            pass
-        os.setgroups([])
-        os.setgid(ids[1])
-        os.setuid(ids[0])
-    resource.setrlimit(resource.RLIMIT_NPROC, (nproc, nproc))
 
 
-def worker_env(home: Path) -> dict[str, str]:
-    """Only what GL and Python need; nothing of the grader's (tokens, paths to the reference)."""
-    keep = ("PATH", "LANG", "LC_ALL", "DISPLAY", "LD_LIBRARY_PATH", "EGL_PLATFORM", "LIBGL_ALWAYS_SOFTWARE",
-            "GALLIUM_DRIVER", "LP_NUM_THREADS", "__EGL_VENDOR_LIBRARY_FILENAMES", "MESA_SHADER_CACHE_DISABLE")
-    env = {k: os.environ[k] for k in keep if k in os.environ}
-    env.setdefault("EGL_PLATFORM", "surfaceless")
-    from .. import KIT_ROOT
-    env.update(HOME=str(home), TMPDIR=str(home), PYTHONDONTWRITEBYTECODE="1", PYTHONHASHSEED="0",
-               PYTHONPATH=str(KIT_ROOT),  # the worker runs the same engine as the grader, wherever it is installed
-               OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MESA_SHADER_CACHE_DISABLE="true",
-               NUMBA_CACHE_DIR=str(home))
-    return env
+def _drop_to(uid: int) -> None:
+    os.setgroups([])
+    os.setgid(uid)
+    os.setuid(uid)
+    if os.getuid() != uid or os.geteuid() != uid:  # never go on as anyone else
+        os._exit(111)
 
 
-@dataclass
-class Completed:
-    returncode: int | None
-    output: str
-    timed_out: bool
+def _count_processes(uid: int) -> int:
+    return len(_processes_of(uid))
 
 
-def run_untrusted(args: list[str], job: Path, limits: Limits, trusted: bool = False,
-                  drop_privileges: bool = True) -> Completed:
-    """Run ``args`` in ``job`` with the limits; ``trusted`` (the reference) keeps the grader's user."""
-    ids = None if trusted or not drop_privileges else unprivileged_ids()
-    if ids is not None:
-        os.chmod(job.parent, 0o711)  # the worker may pass through to its job folder, and see nothing else
-        os.chown(job, ids[0], ids[1])
-        for path in job.iterdir():
-            os.chown(path, ids[0], ids[1])
-    nproc = _count_processes(ids[0] if ids else os.getuid()) + PROCESS_ALLOWANCE
-    log_path = job.parent / f"{job.name}.log"  # outside the job folder: the worker cannot replace it
-    with open(os.open(log_path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600), "wb") as log:
-        # a file, not a pipe: an output flood fills a capped file, not our memory
-        proc = subprocess.Popen(args, cwd=job, stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
-                                env=worker_env(job), start_new_session=True,
-                                preexec_fn=lambda: _preexec(limits, ids, nproc))
-        timed_out = False
+def _processes_of(uid: int) -> list[int]:
+    """Live processes of ``uid`` (zombies are dead already: they wait only for a parent to reap them)."""
+    found = []
+    for status in Path("/proc").glob("[0-9]*/status"):
         try:
-            proc.wait(timeout=limits.wall_seconds)
-        except subprocess.TimeoutExpired:
-            timed_out = True
-        finally:
+            fields = dict(line.split(":", 1) for line in status.read_text().splitlines() if ":" in line)
+            if int(fields["Uid"].split()[0]) == uid and not fields["State"].strip().startswith(("Z", "X")):
+                found.append(int(status.parent.name))
+        except (OSError, ValueError, KeyError):
+            continue
+    return found
+
+
+def _descendants(root: int) -> list[int]:
+    children: dict[int, list[int]] = {}
+    for stat_file in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            text = stat_file.read_text()
+            ppid = int(text[text.rindex(")") + 2:].split()[1])
+        except (OSError, ValueError):
+            continue
+        children.setdefault(ppid, []).append(int(stat_file.parent.name))
+    out, todo = [], [root]
+    while todo:
+        pid = todo.pop()
+        out.append(pid)
+        todo.extend(children.get(pid, []))
+    return out
+
+
+def _rss(pid: int) -> int:
+    try:
+        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) * 1024
+    except (OSError, ValueError):
+        pass
+    return 0
+
+
+def kill_uid(uid: int) -> None:
+    """Kill every process of ``uid``: a child drops to it and signals everyone it may (``kill(-1)``)."""
+    for _ in range(100):
+        if not _processes_of(uid):
+            return
+        pid = os.fork()
+        if pid == 0:
             try:
-                os.killpg(proc.pid, signal.SIGKILL)  # the worker and anything it left behind
-            except (ProcessLookupError, PermissionError):
-                pass
-            proc.wait()
+                _drop_to(uid)
+                os.kill(-1, signal.SIGKILL)
+            finally:
+                os._exit(0)
+        os.waitpid(pid, 0)
+        time.sleep(0.01)
+
+
+def _free_uid() -> int:
+    for _ in range(1000):
+        uid = random.randrange(*UID_RANGE)
+        if not _processes_of(uid):
+            return uid
+    raise IsolationError("no free uid for the sandbox")
+
+
+def _world_writable_dirs() -> list[Path]:
+    """Where any user may create files: the places a uid-only sandbox must sweep after a test."""
+    found = []
+    for top in (Path("/tmp"), Path("/var/tmp"), Path("/dev/shm"), Path("/dev/mqueue"), Path("/run/lock"),
+                Path("/var/lock")):
+        try:
+            if top.is_dir() and not top.is_symlink() and top.stat().st_mode & 0o002:
+                found.append(top)
+                found += [c for c in top.iterdir() if c.is_dir() and not c.is_symlink() and c.stat().st_mode & 0o002]
+        except OSError:
+            continue
+    return found
+
+
+def remove_tree(path: Path) -> None:
+    """Remove a folder the sandbox wrote, however deep or strange (never following links)."""
+    if not os.path.lexists(path):
+        return
+    if shutil.which("rm"):
+        subprocess.run(["rm", "-rf", "--", str(path)], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                       stderr=subprocess.DEVNULL, check=False)
+    if os.path.lexists(path):
+        shutil.rmtree(path, ignore_errors=True)
+
+
+def _remove_ipc(uid: int) -> None:
+    """System V shared memory, queues and semaphores the uid made (they outlive processes)."""
+    for kind, flag in (("shm", "-m"), ("msg", "-q"), ("sem", "-s")):
+        try:
+            lines = Path(f"/proc/sysvipc/{kind}").read_text().splitlines()[1:]
+        except OSError:
+            continue
+        header = Path(f"/proc/sysvipc/{kind}").read_text().splitlines()[0].split()
+        for line in lines:
+            cols = dict(zip(header, line.split()))
+            if cols.get("uid") == str(uid) or cols.get("cuid") == str(uid):
+                subprocess.run(["ipcrm", flag, cols.get("shmid") or cols.get("msqid") or cols.get("semid", "")],
+                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False)
+
+
+_NAMESPACES: bool | None = None
+
+
+def namespaces_work() -> bool:
+    """Whether bubblewrap can make its namespaces here, as the user tests would run as (cached)."""
+    global _NAMESPACES
+    if _NAMESPACES is None:
+        if os.environ.get("CS451_SANDBOX") in ("uid", "none") or not shutil.which("bwrap"):
+            _NAMESPACES = False
+        else:
+            uid = _free_uid() if is_root() else None
+            try:
+                done = subprocess.run(["bwrap", "--unshare-all", "--ro-bind", "/", "/", "--proc", "/proc", "--dev", "/dev",
+                                       "true"], stdin=subprocess.DEVNULL, capture_output=True, timeout=30,
+                                      preexec_fn=(lambda: _drop_to(uid)) if uid is not None else None)
+                _NAMESPACES = done.returncode == 0
+            except (OSError, subprocess.TimeoutExpired):
+                _NAMESPACES = False
+    return _NAMESPACES
+
+
+# --- trusted runs ----------------------------------------------------------------------
+
+def _read_log(log_path: Path) -> str:
     size = log_path.stat().st_size
     with open(log_path, "rb") as log:
         text = log.read(OUTPUT_LIMIT).decode("utf-8", "replace")
-    log_path.unlink()
     if size > OUTPUT_LIMIT:
         text += f"\n… ({size - OUTPUT_LIMIT} more bytes of output cut)"
+    return text
+
+
+def run_trusted(args: list[str], job: Path, limits: Limits, engine: Path) -> Completed:
+    """The reference (literally ``reference``) in a plain subprocess with the limits, as the grader's user."""
+    log_path = job.parent / f"{job.name}.log"
+    with open(os.open(log_path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600), "wb") as log:
+        proc = subprocess.Popen(args, cwd=job, stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
+                                env=worker_env(str(job), str(engine)), start_new_session=True,
+                                preexec_fn=(lambda: _set_limits(limits)) if resource else None)
+        timed_out = _wait(proc, limits.wall_seconds)
+    text = _read_log(log_path)
+    log_path.unlink()
     return Completed(proc.returncode, text, timed_out)
 
 
-def protect(*paths: Path) -> list[Path]:
-    """Make grader-only files unreadable to the worker's user (root only; a no-op otherwise)."""
-    if not is_root():
-        return []
-    done = []
-    for path in paths:
-        if path.exists():
-            os.chmod(path, 0o700 if path.is_dir() else 0o600)
-            done.append(path)
-    return done
+def _wait(proc: subprocess.Popen, seconds: float) -> bool:
+    timed_out = False
+    try:
+        proc.wait(timeout=seconds)
+    except subprocess.TimeoutExpired:
+        timed_out = True
+    finally:
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError, AttributeError):
+            pass
+        proc.wait()
+    return timed_out
+
+
+# --- the sandbox --------------------------------------------------------------------------
+
+@dataclass
+class Sandbox:
+    """One grading run's isolation: a private run folder, the mode in force, and a runner per test.
+
+    Use as a context manager; ``run(request, timeout)`` runs one worker on one job.
+    """
+    stage: str
+    upload: Path
+    engine_sources: list[tuple[Path, str]]   # (source folder, path below the engine root) to copy in
+    protected: list[Path]                    # must be unreadable from inside (checked by the canary)
+    student_copy: bool = False               # no reference or hidden tests here: "none" is allowed
+    mode: str = "auto"                       # auto, bubblewrap, uid, none
+    submission_memory: int = SUBMISSION_MEMORY
+    staged: StagedUpload | None = None
+    run_dir: Path | None = None
+    uid_for_tests: bool = False
+    cgroups_used: bool = False
+    _jobs: int = 0
+    _lock: threading.Lock = field(default_factory=threading.Lock)
+
+    # -- setup and teardown --
+    def __enter__(self) -> "Sandbox":
+        try:
+            self._open()
+        except BaseException:
+            self.close()
+            raise
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def _open(self) -> None:
+        self.run_dir = Path(tempfile.mkdtemp(prefix="cs451-run-")) / f"{random.getrandbits(64):016x}"
+        self.run_dir.mkdir(mode=0o700)   # its parent (0711 below) lists nothing, so the name is the key
+        self.staged = stage_upload(self.upload, self.run_dir / "upload")
+        engine = self.run_dir / "engine"
+        for source, below in self.engine_sources:
+            shutil.copytree(source, engine / below, ignore=shutil.ignore_patterns("*.pyc", "__pycache__"))
+        self.engine = engine
+        (self.run_dir / "jobs").mkdir()
+        (self.run_dir / "logs").mkdir(mode=0o700)
+        for path in [self.run_dir, self.run_dir / "upload", engine, self.run_dir / "jobs", *self._tree(engine),
+                     *self._tree(self.run_dir / "upload")]:
+            os.chmod(path, 0o755 if path.is_dir() else 0o644)
+        os.chmod(self.run_dir, 0o711)   # the sandbox user may pass through to what it is given, and list nothing
+        os.chmod(self.run_dir.parent, 0o711)
+        os.chmod(self.run_dir / "jobs", 0o711)
+        subprocess.run([sys.executable, "-m", "compileall", "-q", str(engine)], check=False,
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # bytecode once, read-only after
+        for path in self._tree(engine):
+            os.chmod(path, 0o755 if path.is_dir() else 0o644)
+        self.mode = self._choose_mode()
+
+    @staticmethod
+    def _tree(root: Path) -> list[Path]:
+        return [Path(d) / n for d, dirs, files in os.walk(root) for n in dirs + files]
+
+    def close(self) -> None:
+        if self.run_dir is not None:
+            remove_tree(self.run_dir.parent)
+            self.run_dir = None
+
+    # -- choosing the isolation --
+    def _choose_mode(self) -> str:
+        wanted = os.environ.get("CS451_SANDBOX", self.mode)
+        if wanted not in ("auto", "bubblewrap", "uid", "none"):
+            raise IsolationError(f"CS451_SANDBOX={wanted!r}: expected auto, bubblewrap, uid or none")
+        reasons = []
+        candidates = ["bubblewrap", "uid", "none"] if wanted == "auto" else [wanted]
+        for mode in candidates:
+            problem = self._usable(mode)
+            if problem is None:
+                return mode
+            reasons.append(f"{mode}: {problem}")
+        raise IsolationError("the submission cannot be isolated here, so it is not run (" + "; ".join(reasons) +
+                             "). Install bubblewrap (apt-get install bubblewrap) or grade as root.")
+
+    def _usable(self, mode: str) -> str | None:
+        if mode == "none":
+            if is_root():
+                return "never as root"
+            if not self.student_copy:
+                return "this kit holds the reference or hidden tests, which a submission must not read"
+            return None
+        if mode == "bubblewrap" and not shutil.which("bwrap"):
+            return "bwrap is not installed"
+        if mode == "uid" and not is_root():
+            return "needs root"
+        self.mode = mode
+        self.uid_for_tests = is_root()
+        return self._canary()
+
+    def _canary(self) -> str | None:
+        """Run a tiny program exactly as a test would; it must see no protected path and change nothing it is given."""
+        script = ("import json, os, sys\n"
+                  "paths = json.loads(sys.argv[1])\n"
+                  "seen = []\n"
+                  "for p in paths:\n"
+                  "    try:\n"
+                  "        os.listdir(p) if os.path.isdir(p) else open(p, 'rb').close()\n"
+                  "        seen.append(p)\n"
+                  "    except OSError:\n"
+                  "        pass\n"
+                  "try:\n"
+                  "    open(os.path.join(sys.argv[2], 'canary'), 'w').close()\n"
+                  "    wrote = True\n"
+                  "except OSError:\n"
+                  "    wrote = False\n"
+                  "import cs451\n"
+                  "print(json.dumps({'seen': seen, 'wrote': wrote, 'uid': os.getuid()}))\n")
+        paths = [str(p) for p in self.protected if os.path.lexists(p)]
+        job = self._new_job()
+        try:
+            done = self.run(["-c", script, json.dumps(paths), self.visible_upload], job,
+                            Limits(wall_seconds=CANARY_SECONDS))
+        except OSError as err:
+            return f"could not start ({err})"
+        finally:
+            self._finish_job(job)
+        try:
+            answer = json.loads(done.output.strip().splitlines()[-1])
+        except (ValueError, IndexError):
+            return f"the canary did not run ({done.output.strip()[-300:] or f'exit {done.returncode}'})"
+        if answer["seen"]:
+            return (f"the sandbox user can read {', '.join(answer['seen'][:3])}; make those folders private "
+                    f"(mode 0700) or install bubblewrap")
+        if answer["wrote"]:
+            return "the sandbox user can change the staged submission"
+        if is_root() and answer["uid"] == 0:
+            return "the worker would run as root"
+        return None
+
+    # -- paths as the worker sees them --
+    @property
+    def visible_engine(self) -> str:
+        return "/kit" if self.mode == "bubblewrap" else str(self.engine)
+
+    @property
+    def visible_upload(self) -> str:
+        return "/submission" if self.mode == "bubblewrap" else str(self.run_dir / "upload")
+
+    def visible_job(self, job: Path) -> str:
+        return "/job" if self.mode == "bubblewrap" else str(job)
+
+    def visible(self, staged_path: Path) -> str:
+        """Where a path inside the staged upload appears to the worker."""
+        rel = staged_path.relative_to(self.run_dir / "upload")
+        return str(Path(self.visible_upload) / rel)
+
+    @property
+    def parallel(self) -> bool:
+        """Tests may overlap only where each has its own namespaces (the uid mode shares /tmp and the rest)."""
+        return self.mode in ("bubblewrap", "none")
+
+    def describe(self) -> str:
+        text = DESCRIPTIONS[self.mode]
+        if self.uid_for_tests and self.mode == "bubblewrap":
+            text += ", as a throwaway user per test"
+        if self.mode != "none":
+            text += "; memory and processes capped " + ("by a cgroup" if self.cgroups_used else "by a watchdog")
+        return text
+
+    # -- one test --
+    def _new_job(self) -> Path:
+        with self._lock:
+            self._jobs += 1
+            job = self.run_dir / "jobs" / str(self._jobs)
+        job.mkdir(mode=0o700)
+        return job
+
+    def new_job(self) -> Path:
+        """A fresh job folder for one test's request and inputs (given to the sandbox user when it runs)."""
+        return self._new_job()
+
+    def _finish_job(self, job: Path) -> None:
+        remove_tree(job)
+
+    def finish_job(self, job: Path) -> None:
+        self._finish_job(job)
+
+    def worker_args(self, job: Path) -> list[str]:
+        return ["-m", "cs451.grading.worker", self.visible_job(job)]
+
+    def run(self, python_args: list[str], job: Path, limits: Limits) -> Completed:
+        """Run ``python python_args`` on ``job`` in the sandbox; everything it started is gone afterwards."""
+        uid = _free_uid() if self.uid_for_tests else None
+        if uid is not None:
+            os.chown(job, uid, uid)
+            for path in job.iterdir():
+                os.chown(path, uid, uid)
+        group = cgroups.create(min(limits.submission_memory, self.submission_memory), PROCESS_ALLOWANCE)
+        self.cgroups_used = group is not None
+        nproc = PROCESS_ALLOWANCE if uid is not None else _count_processes(os.getuid()) + PROCESS_ALLOWANCE
+        command = self._command(python_args, job)
+        env = worker_env(self.visible_job(job), self.visible_engine)
+        if self.mode == "bubblewrap":
+            env = {"PATH": "/usr/bin:/bin"}  # bwrap itself; the worker's environment is set inside
+        log_path = self.run_dir / "logs" / f"{job.name}.log"
+
+        def preexec() -> None:  # in the child, before exec
+            _set_limits(limits)
+            if group is not None:
+                cgroups.join(group.procs_files)
+            if self.mode == "uid":
+                try:  # no network: a new, empty network namespace (needs CAP_SYS_ADMIN; skipped where refused)
+                    ctypes.CDLL(None, use_errno=True).unshare(CLONE_NEWNET)
+                except Exception:
+                    pass
+            if uid is not None:
+                _drop_to(uid)
+            if resource is not None:
+                resource.setrlimit(resource.RLIMIT_NPROC, (nproc, nproc))
+
+        watchdog = None
+        try:
+            with open(os.open(log_path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600), "wb") as log:
+                proc = subprocess.Popen(command, cwd=job, stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
+                                        env=env, start_new_session=True, preexec_fn=preexec if resource else None)
+                if group is None:
+                    watchdog = _Watchdog(proc.pid, uid, self.submission_memory)
+                timed_out = _wait(proc, limits.wall_seconds)
+            out_of_memory = (group.out_of_memory() if group else False) or bool(watchdog and watchdog.tripped)
+            peak = group.peak_memory() if group else (watchdog.peak if watchdog else 0)
+        finally:
+            if watchdog:
+                watchdog.stop()
+            if group is not None:
+                group.remove()
+            if uid is not None:
+                kill_uid(uid)
+        text = _read_log(log_path)
+        log_path.unlink()
+        if uid is not None and self.mode == "uid":
+            self._sweep(uid)
+        return Completed(proc.returncode, text, timed_out, out_of_memory, peak)
+
+    def _command(self, python_args: list[str], job: Path) -> list[str]:
+        python = [sys.executable, "-B", "-s"]
+        if self.mode != "bubblewrap":
+            return python + python_args
+        args = ["bwrap", "--die-with-parent", "--new-session", "--unshare-all", "--cap-drop", "ALL"]
+        for top in ("bin", "sbin", "lib", "lib32", "lib64", "libx32"):
+            path = Path("/") / top
+            if path.is_symlink():
+                args += ["--symlink", os.readlink(path), str(path)]
+            elif path.is_dir():
+                args += ["--ro-bind", str(path), str(path)]
+        args += ["--ro-bind", "/usr", "/usr", "--ro-bind", "/etc", "/etc"]
+        for prefix in sorted({sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix}):
+            if not prefix.startswith("/usr/") and prefix != "/usr":
+                args += ["--ro-bind", prefix, prefix]
+        for lib in os.environ.get("LD_LIBRARY_PATH", "").split(":"):
+            if lib and os.path.isdir(lib) and not lib.startswith("/usr/"):
+                args += ["--ro-bind", lib, lib]
+        args += ["--ro-bind", str(self.engine), "/kit", "--ro-bind", str(self.run_dir / "upload"), "/submission",
+                 "--bind", str(job), "/job", "--tmpfs", "/tmp", "--proc", "/proc", "--dev", "/dev",
+                 "--chdir", "/job", "--clearenv"]
+        for key, value in worker_env("/job", "/kit").items():
+            args += ["--setenv", key, value]
+        return args + ["--"] + python + python_args
+
+    def _sweep(self, uid: int) -> None:
+        """After a test in the uid mode: what the uid left in shared places goes too."""
+        for folder in _world_writable_dirs():
+            try:
+                entries = list(folder.iterdir())
+            except OSError:
+                continue
+            for entry in entries:
+                try:
+                    if entry.lstat().st_uid == uid:
+                        remove_tree(entry) if entry.is_dir() and not entry.is_symlink() else entry.unlink()
+                except OSError:
+                    continue
+        _remove_ipc(uid)
+
+
+class _Watchdog:
+    """Where no cgroup can be made: sum the memory of the test's processes and kill them all past the cap."""
+
+    def __init__(self, pid: int, uid: int | None, cap: int, every: float = 0.05):
+        self.pid, self.uid, self.cap, self.every = pid, uid, cap, every
+        self.peak, self.tripped = 0, False
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._watch, daemon=True)
+        self._thread.start()
+
+    def _members(self) -> list[int]:
+        return _processes_of(self.uid) if self.uid is not None else _descendants(self.pid)
+
+    def _watch(self) -> None:
+        while not self._stop.wait(self.every):
+            members = self._members()
+            total = sum(_rss(p) for p in members)
+            self.peak = max(self.peak, total)
+            if total > self.cap:
+                self.tripped = True
+                for p in members:
+                    try:
+                        os.kill(p, signal.SIGKILL)
+                    except (ProcessLookupError, PermissionError):
+                        pass
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join()

@@ -1,19 +1,32 @@
-"""How a test is declared: points, visibility, tolerance, the probe it runs and how it judges the answer.
+"""How a test is declared: points, tolerance, the probe it runs, the truth it needs and the check that judges.
 
-Specs live in ``autograder/<stage>/`` (public.py ships to students; hidden.py
-does not). A test never imports student code: it names a *probe* that the
-worker runs on the submission in a subprocess, and a *check* that judges the
-arrays that come back, against a truth computed here (closed form, a library,
-or the reference's answer to the same probe).
+Specs live in ``autograder/<stage>/``: ``public.py`` and ``hidden.py`` declare tests,
+``truth.py`` computes independent answers (closed forms, libraries), ``checks.py``
+judges a submission's arrays against them. A test never imports student code: it
+names a *probe* that the worker runs on the submission in a subprocess.
+
+Checks and truths are *named* (:class:`Ref`: a module, a function and JSON
+arguments), never closures, for one reason: a student copy of the kit ships
+the public tests as data (``public.json``, written by ``cs451 release``) with the
+truths already evaluated into arrays beside the reference's answers, so that no
+code that computes an answer ever reaches a student. Only ``checks.py`` ships,
+and it only compares.
 """
 from __future__ import annotations
 
+import importlib
+import json
+import re
 from dataclasses import dataclass, field
 from typing import Any, Callable, Literal
 
 import numpy as np
 
 Outputs = dict[str, np.ndarray]
+
+#: Modules a check may come from (they ship to students) and modules a truth may come from (they never do).
+CHECK_MODULES = re.compile(r"^(cs451\.grading\.checks|autograder\.\w+\.checks)$")
+TRUTH_MODULES = re.compile(r"^autograder\.\w+\.truth$")
 
 
 @dataclass
@@ -33,21 +46,82 @@ class Verdict:
         return Verdict(1.0 if ok else 0.0, message, **kw)
 
 
-Check = Callable[[Outputs, "Outputs | None", dict], Verdict]
+def jsonable(value: Any) -> Any:
+    """Numpy values as plain JSON values (lists and numbers), recursively."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    return value
+
+
+@dataclass(frozen=True)
+class Ref:
+    """A module-level function by module and name, with keyword arguments kept as JSON text."""
+    module: str
+    name: str
+    args: str = "{}"
+
+    @staticmethod
+    def to(fn: Callable[..., Any], **kwargs: Any) -> "Ref":
+        return Ref(fn.__module__, fn.__name__, json.dumps(jsonable(kwargs), sort_keys=True))
+
+    @property
+    def kwargs(self) -> dict[str, Any]:
+        return json.loads(self.args)
+
+    def resolve(self, allowed: re.Pattern) -> Callable[..., Any]:
+        if not allowed.match(self.module):
+            raise ValueError(f"{self.module}.{self.name}: not a module specs may name here")
+        fn = getattr(importlib.import_module(self.module), self.name, None)
+        if not callable(fn):
+            raise ValueError(f"{self.module}.{self.name}: no such function")
+        return fn
+
+    def to_json(self) -> dict[str, Any]:
+        return {"module": self.module, "name": self.name, "kwargs": self.kwargs}
+
+    @staticmethod
+    def from_json(data: dict[str, Any]) -> "Ref":
+        return Ref(data["module"], data["name"], json.dumps(data.get("kwargs", {}), sort_keys=True))
+
+
+def check(fn: Callable[..., Verdict], **kwargs: Any) -> Ref:
+    """Name a check ``fn(out, expected, params, **kwargs) -> Verdict`` from a ``checks`` module."""
+    ref = Ref.to(fn, **kwargs)
+    ref.resolve(CHECK_MODULES)
+    return ref
+
+
+def truth(fn: Callable[..., Any], **kwargs: Any) -> Ref:
+    """Name a truth ``fn(params, **kwargs) -> dict of arrays`` from a ``truth`` module."""
+    ref = Ref.to(fn, **kwargs)
+    ref.resolve(TRUTH_MODULES)
+    return ref
 
 
 @dataclass(frozen=True)
 class Test:
-    """One graded test; ``task`` is the stable ID shared with the handout, the code and the rubric."""
+    """One graded test; ``task`` is the stable ID shared with the handout, the code and the rubric.
+
+    The check receives the submission's arrays, ``expected`` (the reference's answer to the same
+    probe when ``expected == "reference"``, and the truth's arrays when ``truth`` is set) and the
+    parameters. ``hidden`` is set by the loader: every test of ``hidden.py`` is hidden.
+    """
     name: str
     task: str
     points: float
     probe: str
     params: dict[str, Any]
-    check: Check
+    check: Ref
     tolerance: str
     expected: Literal["reference", "none"] = "reference"  # run the same probe on the reference for the truth?
     given: str | None = None        # a reference probe whose outputs feed the submission's probe (trusted inputs)
+    truth: Ref | None = None
     hidden: bool = False
     timeout: float = 60.0
     number: str = ""                # filled in by the loader: "S1.2"
@@ -56,3 +130,16 @@ class Test:
     def visibility(self) -> str:
         """Gradescope's visibility: hidden tests appear only after the grades are published."""
         return "after_published" if self.hidden else "visible"
+
+    def to_json(self) -> dict[str, Any]:
+        """The test as a student copy's manifest holds it (``truth`` only as a flag: its arrays ship beside)."""
+        return {"name": self.name, "task": self.task, "points": self.points, "probe": self.probe,
+                "params": self.params, "check": self.check.to_json(), "tolerance": self.tolerance,
+                "expected": self.expected, "given": self.given, "truth": self.truth.to_json() if self.truth else None,
+                "timeout": self.timeout}
+
+    @staticmethod
+    def from_json(data: dict[str, Any]) -> "Test":
+        return Test(data["name"], data["task"], float(data["points"]), data["probe"], data["params"],
+                    Ref.from_json(data["check"]), data["tolerance"], data["expected"], data.get("given"),
+                    Ref.from_json(data["truth"]) if data.get("truth") else None, False, float(data["timeout"]))

@@ -1,34 +1,37 @@
-"""The reference's answers to a stage's tests, computed ahead of time.
+"""The answers a stage's tests compare with, computed ahead of time.
 
 Gradescope runs every submission in a fresh container, so answers computed while
 grading would be computed again for each of 300 students: ``setup.sh`` warms the
-cache once, when the image is built. A student copy has no reference at all, so
-it ships the answers to the public tests instead.
+cache once, when the image is built. A student copy has neither the reference nor
+the truths: it ships their answers to the public tests instead, as arrays.
 """
 from __future__ import annotations
 
 import shutil
 from pathlib import Path
 
-from ..grading.runner import ReferenceAnswers, load_tests
+from ..grading.expected import ReferenceAnswers, TruthValues, expected_for
+from ..grading.loader import load_tests
+from ..grading.runner import _reference_runner
 from ..grading.spec import Test
 from ..progress import Progress
 
 
 def answer_files(stage: str, tests: list[Test] | None = None, show_progress: bool = False) -> list[Path]:
-    """Compute (or find in the cache) the reference's answer for every test that needs one; their files."""
+    """Compute (or find in the cache) every answer the tests need: the reference's and the truths'; their files."""
     tests = load_tests(stage) if tests is None else tests
-    reference = ReferenceAnswers(stage)
+    reference = ReferenceAnswers(stage, run_reference=_reference_runner)
+    truths = TruthValues(stage)
     files: list[Path] = []
-    bar = Progress(f"reference answers for {stage}", len(tests)) if show_progress else None
+    bar = Progress(f"answers for {stage}", len(tests)) if show_progress else None
     for t in tests:
-        given = None
+        given, _ = expected_for(t, reference, truths)
         if t.given:
-            given = reference.get(t.given, t.params)
             files.append(reference.path(t.given, t.params))
         if t.expected == "reference":
-            reference.get(t.probe, t.params, given)
             files.append(reference.path(t.probe, t.params, given))
+        if t.truth is not None:
+            files.append(truths.path(t))
         if bar:
             bar.advance(note=t.number)
     if bar:

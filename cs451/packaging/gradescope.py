@@ -18,8 +18,8 @@ import zipfile
 from pathlib import Path
 
 from .. import __version__
-from ..errors import KitError
-from ..grading.runner import load_tests
+from ..errors import KitError, SubmissionError
+from ..grading.loader import load_tests
 from ..stages import get_stage
 from .files import LITTER, LITTER_PATTERNS, copy_tree, write_executable
 
@@ -29,19 +29,32 @@ GRADESCOPE_BUDGET = 480.0
 SETUP_SH = """#!/usr/bin/env bash
 # Gradescope runs this once, as root, when it builds the autograder image (Ubuntu 22.04, no GPU).
 # Built by `cs451 autograder build {stage}` (cs451-kit {version}); do not edit, rebuild instead.
+# It leaves nothing a submission could use where a submission could read it: the kit moves to
+# $KIT, private to root except the Python environment the sandboxed worker runs; the source
+# folder keeps only this script and run_autograder.
 set -euo pipefail
 SOURCE="$(cd "$(dirname "$0")" && pwd)"           # /autograder/source
-KIT="${{CS451_HOME:-/opt/cs451-kit}}"              # outside /autograder: the unprivileged worker reads the engine here
+KIT="${{CS451_HOME:-/opt/cs451-kit}}"
 export DEBIAN_FRONTEND=noninteractive
-apt-get update -qq
-apt-get install -y -qq --no-install-recommends python3 python3-venv python3-pip \\
-    libegl1 libegl-mesa0 libgl1-mesa-dri libglu1-mesa >/dev/null
+if [ -z "${{CS451_SKIP_SYSTEM_PACKAGES:-}}" ]; then   # (the kit's tests reuse the machine's packages)
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends python3 python3-venv python3-pip bubblewrap \\
+      libegl1 libegl-mesa0 libgl1-mesa-dri libglu1-mesa >/dev/null
+fi
 rm -rf "$KIT" && mkdir -p "$KIT" && cp -a "$SOURCE/." "$KIT/"
-/usr/bin/python3 -m venv "$KIT/.venv"
-"$KIT/.venv/bin/python" -m pip install -q --upgrade pip
-"$KIT/.venv/bin/python" -m pip install -q -e "$KIT"
-chmod -R a+rX "$KIT"                              # the grader locks reference/ and autograder/ before each run
-cd "$KIT" && "$KIT/.venv/bin/python" -m cs451 autograder warm {stage}   # reference answers, once per image
+if [ -n "${{CS451_VENV:-}}" ]; then                 # (the kit's tests reuse an environment)
+  ln -s "$CS451_VENV" "$KIT/.venv"
+else
+  /usr/bin/python3 -m venv "$KIT/.venv"
+  echo "setup: installing the kit's Python packages (a few minutes)"
+  "$KIT/.venv/bin/python" -m pip install --progress-bar off --upgrade pip | tail -n 1
+  "$KIT/.venv/bin/python" -m pip install --progress-bar off -e "$KIT" | tail -n 1
+fi
+chmod -R go-rwx "$KIT" && chmod 0711 "$KIT"       # the worker may pass through to its Python, and read nothing
+[ -L "$KIT/.venv" ] || chmod -R a+rX "$KIT/.venv"
+find "$SOURCE" -mindepth 1 -maxdepth 1 ! -name setup.sh ! -name run_autograder -exec rm -rf {{}} +
+chmod 0700 "$SOURCE"
+cd "$KIT" && "$KIT/.venv/bin/python" -m cs451 autograder warm {stage}   # every answer, once per image
 """
 
 RUN_AUTOGRADER = """#!/usr/bin/env bash
@@ -86,19 +99,9 @@ def build_gradescope(stage: str, output: str | Path) -> Path:
     return output
 
 
-def stage_submission(submission: Path, stage: str) -> Path:
-    """Copy what the student uploaded into a folder the unprivileged worker can read, without litter."""
-    if not submission.is_dir():
-        raise KitError(f"{submission}: no submission folder")
-    dest = Path(tempfile.mkdtemp(prefix=f"cs451-submission-{stage}-"))
-    os.chmod(dest, 0o755)
-    shutil.copytree(submission, dest / "submission", ignore=LITTER, symlinks=False)
-    for folder, dirs, files in os.walk(dest):
-        for name in dirs:
-            os.chmod(Path(folder) / name, 0o755)
-        for name in files:
-            os.chmod(Path(folder) / name, 0o644)
-    return dest / "submission"
+#: Memory for everything one test of a submission starts, together: Gradescope gives the container 768 MB,
+#: and the grader itself needs the rest (measured by `cs451 bench autograder`).
+GRADESCOPE_SUBMISSION_MEMORY = 448 << 20
 
 
 def run_gradescope(stage: str, submission: str | Path, results: str | Path,
@@ -106,15 +109,17 @@ def run_gradescope(stage: str, submission: str | Path, results: str | Path,
     """Grade one Gradescope submission into ``results`` (results.json); always writes it."""
     from ..grading.results import write_failure, write_results
     from ..grading.runner import grade
-    from ..grading import sandbox
     results = Path(results)
     results.parent.mkdir(parents=True, exist_ok=True)
-    sandbox.protect(results.parent)  # only the grader writes the results (a no-op unless we are root)
+    root = Path(os.environ.get("AUTOGRADER_ROOT", "/autograder"))
     try:
-        copy = stage_submission(Path(submission), stage)
-        result = grade(stage, copy, include_hidden=True, show_progress=False, jobs=1, total_timeout=budget)
-    except KitError as err:  # nothing gradable was uploaded: say what is expected
+        result = grade(stage, Path(submission), include_hidden=True, show_progress=False, jobs=1, total_timeout=budget,
+                       protected=(results.parent, root / "source"), submission_memory=GRADESCOPE_SUBMISSION_MEMORY)
+    except SubmissionError as err:  # nothing gradable was uploaded: say what is expected
         write_failure(results, str(err), blame_submission=True)
+        return 0
+    except KitError as err:         # e.g. no isolation here: grading must not go on
+        write_failure(results, str(err))
         return 0
     except BaseException as err:
         write_failure(results, f"{type(err).__name__}: {err}")

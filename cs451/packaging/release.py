@@ -1,9 +1,12 @@
 """``cs451 release``: the starter repository students clone (a GitHub Classroom template).
 
 It holds the engine, the student's package (the starter), the handout, the public
-tests with the reference's answers to them, a count of the hidden tests, and a
-workflow that runs the public tests on every push. It never holds the reference,
-the hidden tests or their answers; a test checks that.
+tests as data (``public.json``) with the answers they compare with (the reference's
+and the truths', as arrays), the checks that compare, a count of the hidden tests,
+and a workflow that runs the public tests on every push. It never holds the
+reference, the hidden tests, the truths or any code that computes an answer; a
+test builds a submission from everything shipped and expects 0. An earlier
+stage's reference (a later stage may build on it) ships only when asked for.
 """
 from __future__ import annotations
 
@@ -13,10 +16,13 @@ from pathlib import Path
 
 from .. import KIT_ROOT
 from ..errors import KitError
-from ..grading.runner import hidden_summary, load_tests
+from ..grading.loader import hidden_summary, load_tests, write_manifest
 from ..stages import get_stage
 from .answers import export_answers
 from .files import LITTER, copy_tree, write_executable
+
+#: What of ``autograder/<stage>/`` a student copy holds: the package marker and the checks (which only compare).
+SHIPPED_SPEC_FILES = ("__init__.py", "checks.py")
 
 WORKFLOW_HEADER = """# Runs the public tests of stage {stage} on every push (GitHub Classroom autograding).
 # Built by `cs451 release {stage}`; the points per task are the public tests' points.
@@ -121,12 +127,20 @@ def _setup_script(stage: str) -> str:
                                      f"(see README.md)'\n")
 
 
-def build_release(stage: str, output: str | Path) -> Path:
-    """Write the student repository for ``stage`` into the folder ``output`` (which must not exist)."""
+def build_release(stage: str, output: str | Path, include_reference: tuple[str, ...] = ()) -> Path:
+    """Write the student repository for ``stage`` into the folder ``output`` (which must not exist).
+
+    ``include_reference``: earlier stages (of those this stage builds on) whose reference solution
+    ships too, so the stage's engine can run it; only once their deadlines have passed.
+    """
     st = get_stage(stage)
     out = Path(output)
     if out.exists() and any(out.iterdir()):
         raise KitError(f"{out}: exists and is not empty; choose a new folder")
+    unknown = [s for s in include_reference if s not in st.builds_on]
+    if unknown:
+        raise KitError(f"--include-reference {', '.join(unknown)}: stage {stage} builds on "
+                       f"{', '.join(st.builds_on) or 'no earlier stage'}; only those references can ship with it")
     starter = KIT_ROOT / "starter" / stage
     if not starter.is_dir():
         raise KitError(f"starter/{stage}: missing; run `cs451 starter` first")
@@ -134,15 +148,17 @@ def build_release(stage: str, output: str | Path) -> Path:
     for rel in ("cs451", "pyproject.toml", f"assignments/{st.handout}", "autograder/__init__.py"):
         copy_tree(rel, out)
     shutil.copytree(starter, out / stage, ignore=LITTER)
-    for earlier in st.builds_on:  # the engine runs their reference (their deadlines have passed)
+    for earlier in include_reference:
         copy_tree(f"reference/{earlier}", out)
-    spec_dir = KIT_ROOT / "autograder" / stage
-    shutil.copytree(spec_dir, out / "autograder" / stage,
-                    ignore=shutil.ignore_patterns("hidden.py", "answers", "__pycache__", "*.pyc"))
+    spec_out = out / "autograder" / stage
+    spec_out.mkdir(parents=True)
+    for name in SHIPPED_SPEC_FILES:
+        shutil.copy2(KIT_ROOT / "autograder" / stage / name, spec_out / name)
     public = load_tests(stage, include_hidden=False)
-    export_answers(stage, public, out / "autograder" / stage / "answers")
+    write_manifest(stage, public, spec_out)
+    export_answers(stage, public, spec_out / "answers")
     hidden = hidden_summary(stage)
-    (out / "autograder" / stage / "hidden.json").write_text(json.dumps(hidden, indent=2) + "\n")
+    (spec_out / "hidden.json").write_text(json.dumps(hidden, indent=2) + "\n")
     write_executable(out / "setup.sh", _setup_script(stage))
     workflow = out / ".github" / "workflows" / "classroom.yml"
     workflow.parent.mkdir(parents=True)

@@ -107,7 +107,7 @@ def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, **_: An
     ff = HemicubeFormFactors(quads, impl, resolution=opts.resolution, rotate=opts.rotate)
     if opts.view == "itembuffer":
         return item_buffer_image(ff, opts.patch, size)
-    image = formfactor_image(scene, quads, ff.row(opts.patch), size)
+    image = formfactor_image(scene, quads, ff.row(opts.patch), impl, size)
     print(f"patch {opts.patch}: {ff.summary()}", file=sys.stderr)   # row sums, reciprocity, closure: every run
     return image
 

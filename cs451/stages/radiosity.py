@@ -241,17 +241,18 @@ class MatrixRows:
 
 def hemicube_formfactors(quads: np.ndarray, resolution: int = 128, proximity: str = "contour", ctx: Any = None,
                          batch: int = 256, seed: int = 0) -> Any:
-    """Stage 3's trusted hemicube engine over the reference hemicube implementation (lazy, cached rows).
+    """Stage 3's hemicube engine over the stage-3 implementation this copy has (lazy, cached rows).
 
-    Pass the GL context you draw with as ``ctx`` when you draw while rows are still being computed
-    (the demo): the engine renders into whichever context is current. ``batch`` hemicubes share a
+    That is the reference in the kit (see :func:`cs451.impl.earlier_stage_impl`). Pass the GL context
+    you draw with as ``ctx`` when you draw while rows are still being computed (the demo): the engine
+    makes its own context current for each batch and leaves it so. ``batch`` hemicubes share a
     read-back: 1 suits rows asked for one at a time (shooting), the default suits whole matrices.
     ``seed`` picks the hemicubes' random rotations (another seed: an independent estimate of F).
     """
     from ..formfactors import HemicubeFormFactors
-    from ..impl import load_impl, resolve_impl
+    from ..impl import earlier_stage_impl, load_impl
 
-    impl = load_impl(resolve_impl("reference", "hemicube"), "hemicube")
+    impl = load_impl(earlier_stage_impl("hemicube"), "hemicube")
     return HemicubeFormFactors(quads, impl, resolution=resolution, proximity=proximity, ctx=ctx,
                                batch=batch, seed=seed, resample_blind=RESAMPLE_BLIND)
 
@@ -438,20 +439,14 @@ void main() { frag_color = vec4(v_color, 1.0); }
 
 
 def camera_matrix(scene: Scene, width: int, height: int) -> np.ndarray:
-    """Projection · view of the scene camera, from pyrender's camera model (an independent library)."""
-    from ..pyrender_shim import pyrender
+    """Projection · view of the scene camera (:mod:`cs451.viewing`: pyrender's projection, the stage-3 view)."""
+    from ..impl import earlier_stage_impl, load_impl
+    from ..viewing import camera_projection, camera_view
+    from . import hemicube as H
 
-    cam = scene.camera
-    projection = pyrender.PerspectiveCamera(yfov=math.radians(cam.fovy), znear=cam.near, zfar=cam.far,
-                                            aspectRatio=width / height).get_projection_matrix(width, height)
-    eye, center, up = (np.asarray(v, dtype=np.float64) for v in (cam.eye, cam.center, cam.up))
-    back = (eye - center) / np.linalg.norm(eye - center)          # the camera looks down its -z axis
-    right = np.cross(up, back)
-    right /= np.linalg.norm(right)
-    pose = np.eye(4)
-    pose[:3, :3] = np.column_stack([right, np.cross(back, right), back])
-    pose[:3, 3] = eye
-    return projection @ np.linalg.inv(pose)
+    impl = load_impl(earlier_stage_impl("hemicube"), "hemicube")
+    view = camera_view(scene.camera, lambda c, n, u: H.call_views(impl, c, n, u))
+    return camera_projection(scene.camera, width, height) @ view
 
 
 class GouraudDrawer:

@@ -6,8 +6,9 @@ so a row holds patch-to-element form factors F_pe. Rows then number the patches,
 elements, while the radiosity is resolved on the elements. The price is an approximation:
 a patch shoots its area-averaged unshot radiosity, from its centre, as if it were uniform.
 
-This is engine code for the benchmark (``cs451 bench radiosity``), which measures what that
-approximation costs in accuracy against what it saves in rows; it is not a student task.
+This is the benchmark's code (``cs451 bench radiosity``), which measures what that
+approximation costs in accuracy against what it saves in rows. It lives in bench/, not in
+the engine, because its shooting loop would solve task R3: nothing in bench/ reaches students.
 """
 from __future__ import annotations
 
@@ -17,8 +18,10 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .errors import KitError
-from .patches import as_quads, patch_centers, patch_normals, subdivide_uniform
+from cs451.errors import KitError
+from cs451.patches import as_quads, patch_centers, patch_normals
+
+from bench.meshes import subdivide_uniform
 
 
 class PatchToElementRows:

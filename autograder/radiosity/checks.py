@@ -1,0 +1,169 @@
+"""Stage 4's checks: they compare a submission's arrays with the truths' (``expected``) and compute no answer.
+
+Shipped to students with the public tests. The shooting loop is judged by what
+it must produce *and* by how it got there: a converged answer alone (which a
+direct solve also gives) earns nothing unless the number of shots is that of a
+progressive refinement, as the reference's run of the same test counts them.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from cs451.grading.checks import output
+from cs451.grading.spec import Verdict
+from cs451.patches import patch_areas, patch_normals
+
+
+def _patches(out, p):
+    patches = output(out, "patches", (None, 4, 3), "patches")
+    parent = output(out, "parent", (len(patches),), "parent")
+    if len(parent) and (parent.min() < 0 or parent.max() >= len(p["quads"]) or not np.all(parent == np.round(parent))):
+        raise ValueError(f"parent must hold indices of the {len(p['quads'])} quads")
+    return patches, parent.astype(np.int64)
+
+
+def subdivide_exact(out, expected, p):
+    want, parent_want = np.asarray(expected["patches"], float), np.asarray(expected["parent"])
+    patches, parent = _patches(out, p)
+    if patches.shape != want.shape:
+        return f"{len(patches)} patches, expected {len(want)} (nu × nv per quad, handout §R1)"
+    if not np.array_equal(parent, parent_want):
+        return "parent is not the index of each patch's quad, in order"
+    err = np.abs(patches - want).max() / max(np.abs(want).max(), 1.0)
+    return None if err <= 1e-9 else f"corners differ from the bilinear grid by {err:.2e} (relative)"
+
+
+def subdivide_area(out, expected, p):
+    patches, parent = _patches(out, p)
+    if len(patches) > 4 * len(expected["patches"]) + 16:
+        return f"{len(patches)} patches, far more than the {len(expected['patches'])} needed"
+    got = np.bincount(parent, weights=patch_areas(patches), minlength=len(p["quads"]))
+    want = patch_areas(np.asarray(p["quads"]))
+    err = np.abs(got / want - 1).max()
+    return None if err <= 1e-5 else f"the patches of a quad cover {err:.2%} more or less than the quad"
+
+
+def subdivide_edges(out, expected, p):
+    q, _ = _patches(out, p)
+    longest = np.linalg.norm(q - np.roll(q, -1, axis=1), axis=2).max() if len(q) else 0.0
+    if not len(q):
+        return "no patches"
+    return None if p["max_edge"] <= 0 or longest <= p["max_edge"] * (1 + 1e-9) else \
+        f"an edge is {longest:.4g} long, longer than max_edge {p['max_edge']}"
+
+
+def subdivide_facing(out, expected, p):
+    patches, parent = _patches(out, p)
+    got = patch_normals(patches)
+    want = patch_normals(np.asarray(p["quads"]))[parent]
+    worst = float((got * want).sum(axis=1).min()) if len(got) else -1.0
+    return None if worst > 0.999 else "a patch faces away from its quad (corners not counter-clockwise)"
+
+
+def shot_matches(out, expected, p) -> Verdict:
+    n = len(p["areas"])
+    B, dB = output(out, "radiosity", (n, 3), "radiosity"), output(out, "unshot", (n, 3), "unshot")
+    ok_b = np.allclose(B, expected["radiosity"], rtol=1e-9, atol=1e-12)
+    ok_d = np.allclose(dB, expected["unshot"], rtol=1e-9, atol=1e-12)
+    if ok_b and ok_d:
+        return Verdict(1.0, "B and ΔB match the hand-worked shot")
+    what = [name for name, ok in (("radiosity", ok_b), ("unshot", ok_d)) if not ok]
+    return Verdict(0.5 if len(what) == 1 else 0.0, f"{' and '.join(what)} differ from the hand-worked shot "
+                   f"(ΔRad_j = ρ_j ΔB_i F_ij A_i / A_j, then ΔB_i = 0)")
+
+
+def loop_matches(out, expected, p) -> Verdict:
+    """Order of shots and B, ΔB after them, against the loop worked by hand (linear search, no heap)."""
+    n = len(p["areas"])
+    order = [int(i) for i in np.asarray(expected["order"]).ravel()]
+    got = [int(i) for i in output(out, "order", (None,), "order")]
+    if got != order:
+        first = next((k for k, (a, b) in enumerate(zip(got, order)) if a != b), min(len(got), len(order)))
+        return Verdict(0.0, f"shot order differs from shot {first + 1} on: {got[:first + 3]}… expected "
+                       f"{order[:first + 3]}… ({len(got)} shots, expected {len(order)})")
+    B, dB = output(out, "radiosity", (n, 3), "radiosity"), output(out, "unshot", (n, 3), "unshot")
+    if not (np.allclose(B, expected["radiosity"], rtol=1e-8, atol=1e-12)
+            and np.allclose(dB, expected["unshot"], rtol=1e-8, atol=1e-12)):
+        return Verdict(0.5, "the order of shots is right but B or ΔB are not")
+    return Verdict(1.0, f"{len(order)} shots in the right order with the right B and ΔB")
+
+
+def _shots_like_reference(out, expected, low: float = 0.8, high: float = 1.25) -> str | None:
+    """A progressive refinement shoots about as often as the reference's does on the same system."""
+    got = len(output(out, "order", (None,), "order"))
+    want = len(np.asarray(expected["order"]).ravel())
+    if not low * want <= got <= high * want:
+        return (f"{got} shots, where progressive refinement takes about {want} on this system "
+                f"(shoot one patch at a time, until the unshot energy is below the tolerance)")
+    return None
+
+
+def furnace_uniform(out, expected, p, want: float) -> Verdict:
+    """B = E/(1 − ρ) on every patch, reached by shooting."""
+    n = len(p["areas"])
+    B = output(out, "radiosity", (n, 3), "radiosity")
+    err = float(np.abs(B / want - 1).max())
+    if not np.isfinite(err):
+        return Verdict(0.0, "radiosity is not finite")
+    detail = {"relative_error": err}
+    if err > 2 * p["tolerance"]:
+        return Verdict(0.0, f"B should be E/(1 − ρ) = {want:g} everywhere; off by up to {err:.2%}", detail=detail)
+    shots = _shots_like_reference(out, expected)
+    if shots:
+        return Verdict(0.0, f"B = {want:g}, but {shots}", detail=detail)
+    return Verdict(1.0, f"B = E/(1 − ρ) = {want:g} within {err:.1e}", detail=detail)
+
+
+def converged_to_direct(out, expected, p, within: float) -> Verdict:
+    """Converged to the direct solve of the same form factors by shooting, fetching rows only for shooters."""
+    want = np.asarray(expected["direct"], float)
+    got = output(out, "radiosity", want.shape, "radiosity")
+    err = float(np.abs(got - want).sum() / np.abs(want).sum())
+    order = output(out, "order", (None,), "order")
+    rows, shooters = int(output(out, "rows_computed", (), "rows_computed")), len(set(order.astype(np.int64).tolist()))
+    detail = {"relative_error": err, "rows_computed": rows, "shooters": shooters}
+    if not err <= within:
+        return Verdict(0.0, f"differs from the direct solve of (I − ρF)B = E by {err:.2%} (allowed {within:.1%})", detail=detail)
+    shots = _shots_like_reference(out, expected)
+    if shots:
+        return Verdict(0.0, f"converged, but {shots}", detail=detail)
+    if rows > shooters:
+        return Verdict(0.5, f"converged, but fetched {rows} rows for {shooters} shooters (fetch a row only to shoot)", detail=detail)
+    return Verdict(1.0, f"within {err:.1e} of the direct solve; {rows} rows for {shooters} shooters", detail=detail)
+
+
+def ambient_matches(out, expected, p) -> Verdict:
+    want = np.asarray(expected["value"], float)
+    got = output(out, "ambient", want.shape, "ambient")
+    if np.allclose(got, want, rtol=1e-9, atol=1e-12):
+        return Verdict(1.0, "ambient matches")
+    return Verdict(0.0, f"ambient is {np.round(got, 6).tolist()}, expected {np.round(want, 6).tolist()} "
+                   "(R · ΣΔB A / ΣA, R = 1/(1 − ρ_avg))")
+
+
+def _vertices(out, p):
+    m = len(p["quads"])
+    positions = output(out, "positions", (None, 3), "positions")
+    corners = output(out, "corners", (m, 4), "corners")
+    if len(positions) > 4 * m or (corners.size and (corners.min() < 0 or corners.max() >= len(positions))):
+        raise ValueError("corners must index positions")
+    colors = output(out, "colors", (len(positions), 3), "colors")
+    return positions, corners.astype(np.int64), colors
+
+
+def vertex_corners(out, expected, p):
+    positions, corners, _ = _vertices(out, p)
+    return None if np.allclose(positions[corners], p["quads"], atol=1e-9) else "positions[corners] are not the patches' corners"
+
+
+def vertex_colours(out, expected, p):
+    positions, corners, colors = _vertices(out, p)
+    if np.allclose(colors[corners], expected["corner_colors"], rtol=1e-9, atol=1e-12):
+        return None
+    return "a vertex's colour is not the average of the patches of its polygon that meet there"
+
+
+def vertex_shared(out, expected, p):
+    positions, _, _ = _vertices(out, p)
+    n, want = len(positions), int(expected["vertex_count"])
+    return None if n == want else f"{n} vertices, expected {want} (one per point per polygon)"

@@ -1,0 +1,123 @@
+"""Stage 1's checks: they compare a submission's arrays with the truths' (``expected``) and compute no answer.
+
+Shipped to students with the public tests; the answers themselves come from
+``truth.py`` (never shipped) or, in a student copy, from its packaged arrays.
+"""
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+
+from cs451.grading.checks import output
+
+
+def _match(a: np.ndarray, b: np.ndarray, tol: float) -> int:
+    """How many points of ``a`` have no point of ``b`` within ``tol``."""
+    missing = 0
+    for start in range(0, len(a), 512):
+        d = np.linalg.norm(a[start:start + 512, None, :] - b[None, :, :], axis=2)
+        missing += int((d.min(axis=1) > tol).sum()) if len(b) else len(d)
+    return missing
+
+
+def _mesh(out, expected):
+    n, m = (int(c) for c in expected["counts"])
+    pos = output(out, "positions", (None, 3))
+    tri = output(out, "triangles", (None, 3))
+    nrm = output(out, "normals", (len(pos), 3))
+    return n, m, pos, nrm, tri
+
+
+def mesh_counts(out, expected, p):
+    n, m, pos, _, tri = _mesh(out, expected)
+    if (len(pos), len(tri)) != (n, m):
+        return f"{len(pos)} vertices and {len(tri)} triangles, expected {n} and {m}"
+
+
+def mesh_normals(out, expected, p):
+    _, _, pos, nrm, _ = _mesh(out, expected)
+    length = np.linalg.norm(nrm, axis=1)
+    if not np.allclose(length, 1.0, atol=1e-5):
+        return f"normals must have unit length (found lengths from {length.min():.4g} to {length.max():.4g})"
+    if not np.allclose(nrm, pos / p["radius"], atol=1e-5):
+        return "normals must point straight out of the sphere (position / radius)"
+
+
+def mesh_vertices(out, expected, p):
+    n, _, pos, _, _ = _mesh(out, expected)
+    if len(pos) > 4 * n:
+        return f"{len(pos)} vertices, far more than glutSolidSphere's {n}"
+    want = np.asarray(expected["vertices"], float)
+    tol = 1e-6 * p["radius"]
+    missing, extra = _match(want, pos, tol), _match(pos, want, tol)
+    if missing or extra:
+        return (f"{missing} of glutSolidSphere's vertices are missing and {extra} vertices are not on its "
+                f"rings (poles on ±z, θ = πi/stacks, φ = -2πj/slices)")
+
+
+def mesh_closed(out, expected, p):
+    _, m, pos, _, tri = _mesh(out, expected)
+    if len(tri) > 4 * m or (len(tri) and (tri.min() < 0 or tri.max() >= len(pos) or not np.all(tri == np.round(tri)))):
+        return "triangles must index the vertices (0 .. n-1)"
+    mesh = trimesh.Trimesh(pos, tri.astype(np.int64), process=False)
+    if not mesh.is_watertight:
+        return "the surface has holes or duplicated edges (not watertight)"
+    if not mesh.is_winding_consistent:
+        return "triangles are not wound consistently"
+    if mesh.volume <= 0:
+        return "triangles are wound clockwise seen from outside (they must be counter-clockwise)"
+
+
+def mesh_no_degenerate(out, expected, p):
+    _, m, pos, _, tri = _mesh(out, expected)
+    if len(tri) > 4 * m or (len(tri) and (tri.min() < 0 or tri.max() >= len(pos))):
+        return "triangles must index the vertices (0 .. n-1)"
+    t = tri.astype(np.int64)
+    area = 0.5 * np.linalg.norm(np.cross(pos[t[:, 1]] - pos[t[:, 0]], pos[t[:, 2]] - pos[t[:, 0]]), axis=1)
+    tiny = int((area <= 1e-12 * p["radius"] ** 2).sum())
+    if tiny:
+        return f"{tiny} triangles have zero area"
+
+
+def reshape_viewport(out, expected, p):
+    got = tuple(int(v) for v in output(out, "viewport", (4,), "the viewport"))
+    want = tuple(int(v) for v in expected["viewport"])
+    if got != want:
+        return f"viewport is {got}, expected {want} to cover the window"
+
+
+def _projection(out):
+    proj = output(out, "projection", (4, 4), "the projection")
+    if not np.isfinite(proj).all():
+        raise ValueError("the projection has NaN or infinite entries (a division by a zero height?)")
+    return proj
+
+
+def reshape_aspect(out, expected, p):
+    proj = _projection(out)
+    want = float(expected["aspect"])
+    got = proj[1, 1] / proj[0, 0] if proj[0, 0] else np.inf
+    if not np.isclose(got, want, rtol=1e-6):
+        return f"the projection's aspect ratio (P[1,1]/P[0,0]) is {got:.6g}, expected width/height = {want:.6g}"
+
+
+def reshape_fovy(out, expected, p):
+    proj = _projection(out)
+    want = float(expected["p11"])
+    if not np.isclose(proj[1, 1], want, rtol=1e-6):
+        return f"P[1,1] is {proj[1, 1]:.6g}: the vertical field of view must stay {p['camera']['fovy']}° whatever the width"
+
+
+def key_press(out, expected, p, index: int):
+    """Press ``index`` gives the state the handout's table says (every field)."""
+    key, state = p["presses"][index]
+    wrong = []
+    for field in ("running", "shading", "slices", "stacks"):
+        got = np.asarray(out[field])
+        if got.shape != (len(p["presses"]),):
+            return f"{field} has shape {got.shape}, expected one value per press"
+        want = expected[field][index].item()
+        if got[index].item() != want:
+            wrong.append(f"{field}={got[index].item()!r}, expected {want!r}")
+    if wrong:
+        return f"key {key!r} from {state}: " + ", ".join(wrong)
