@@ -32,7 +32,7 @@ def _cmd_grade(a: argparse.Namespace) -> int:
     from .grading.results import write_failure
     from .grading.runner import grade
     try:
-        result = grade(a.stage, a.submission, include_hidden=not a.public_only, jobs=a.jobs)
+        result = grade(a.stage, a.submission, include_hidden=not a.public_only, jobs=a.jobs, tasks=_tasks(a.tasks))
     except BaseException as err:  # a results file is always written, with the reason, before we fail
         if a.results:
             write_failure(a.results, f"{type(err).__name__}: {err}")
@@ -44,6 +44,10 @@ def _cmd_grade(a: argparse.Namespace) -> int:
     if a.report:
         print(f"wrote {write_report(a.report, result, show_hidden=not a.student_view)}")
     return 0
+
+
+def _tasks(text: str | None) -> list[str] | None:
+    return [t.strip() for t in text.split(",") if t.strip()] if text else None
 
 
 def _cmd_starter(a: argparse.Namespace) -> int:
@@ -97,7 +101,7 @@ def _cmd_autograder(a: argparse.Namespace) -> int:
         return 0
     if a.action == "run":
         from .packaging.gradescope import run_gradescope
-        return run_gradescope(a.stage, a.submission, a.results)
+        return run_gradescope(a.stage, a.submission, a.results, tasks=_tasks(a.tasks))
     raise KitError(f"unknown action {a.action}")
 
 
@@ -154,6 +158,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--public-only", action="store_true", help="run only the public tests, as a student's copy does")
     g.add_argument("--student-view", action="store_true", help="report: count hidden tests without showing them")
     g.add_argument("--jobs", type=int, default=None, help="tests run at once (default: 2)")
+    g.add_argument("--tasks", help="only these tasks' tests, e.g. S1,S2")
     g.set_defaults(func=_cmd_grade)
 
     s = sub.add_parser("starter", help="regenerate starter/ from reference/", description="Regenerate starter/ from the solution regions of reference/.")
@@ -186,6 +191,7 @@ def build_parser() -> argparse.ArgumentParser:
     agr.add_argument("stage", choices=stage_names())
     agr.add_argument("--submission", default="/autograder/submission")
     agr.add_argument("--results", default="/autograder/results/results.json")
+    agr.add_argument("--tasks", help="only these tasks' tests (for testing the autograder)")
     agp = agsub.add_parser("passed", help="exit 0 when every test of TASK passed in RESULTS")
     agp.add_argument("results", help="a results.json written by `cs451 grade --results`")
     agp.add_argument("task", help="a task ID, e.g. S1")

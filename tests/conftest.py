@@ -28,3 +28,22 @@ def make_submission(tmp_path: Path):
             path.write_text(text.replace(old, new, 1))
         return root
     return make
+
+
+def world_readable_dir(prefix: str) -> Path:
+    """A scratch folder the grader's sandbox user may enter (pytest's tmp_path is private to root)."""
+    import os
+    import tempfile
+    path = Path(tempfile.mkdtemp(prefix=prefix))
+    os.chmod(path, 0o755)
+    return path
+
+
+@pytest.fixture(scope="session")
+def gradescope(request) -> tuple[Path, dict]:
+    """Stage 1's autograder zip in Gradescope's layout, after its own setup.sh ran (the kit moved to opt/)."""
+    import sys
+    from cs451.packaging.gradescope import build_gradescope, setup_like_gradescope
+    top = world_readable_dir("cs451-gs-")
+    request.addfinalizer(lambda: shutil.rmtree(top, ignore_errors=True))
+    return setup_like_gradescope(build_gradescope("sphere", top / "autograder.zip"), top, sys.prefix)

@@ -2,13 +2,13 @@
 from __future__ import annotations
 
 import json
-import os
 
 import pytest
 
 from cs451.grading.report import write_report
 from cs451.grading.results import format_table, to_gradescope, write_results
-from cs451.grading.runner import grade, load_tests
+from cs451.grading.loader import load_tests
+from cs451.grading.runner import grade
 
 
 def points_by_task(result):
@@ -90,10 +90,12 @@ def test07_results_json_follows_gradescope_and_report_shows_images(reference_gra
     assert to_gradescope(reference_grade)["tests"][0]["status"] == "passed"
 
 
-@pytest.mark.skipif(os.geteuid() != 0, reason="the lock-out of reference/ happens only for a root grader")
-def test_grading_the_reference_first_as_root_is_a_self_test(kit_root):
-    """A fresh clone graded as root: the reference must not be locked out of its own folder."""
-    os.chmod(kit_root / "reference", 0o755)
-    result = grade("sphere", "reference", show_progress=False, tasks=["S1"])
-    assert result.score == result.max_score > 0, [r.verdict.message for r in result.results]
-    assert "self-test" in result.isolation and (kit_root / "reference").stat().st_mode & 0o005 == 0o005
+def test08_only_the_word_reference_is_trusted_and_grading_leaves_the_kit_as_it_was(kit_root):
+    """A path that leads to the reference is a submission like any other: sandboxed, not a self-test."""
+    watched = [kit_root, kit_root / "reference", kit_root / "autograder", kit_root / ".cs451-cache"]
+    modes = {p: p.stat().st_mode for p in watched if p.exists()}
+    trusted = grade("sphere", "reference", show_progress=False, tasks=["S1"])
+    by_path = grade("sphere", kit_root / "reference", show_progress=False, tasks=["S1"])
+    assert "trusted" in trusted.isolation and "trusted" not in by_path.isolation
+    assert trusted.score == by_path.score == trusted.max_score == 10
+    assert modes == {p: p.stat().st_mode for p in modes}

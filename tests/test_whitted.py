@@ -110,13 +110,14 @@ def test05_index_of_refraction_one_vanishes(ref):
 def test06_primary_visibility_matches_pyrender(ref):
     import sys
     sys.path.insert(0, str(BUNDLED_DIR.parent.parent))
-    from autograder.whitted import truth
+    from autograder.whitted import checks, truth
     p = {"scene": scene_dict("cornell-box"), "size": [64, 64]}
     rays = whitted.probe_primary_rays(ref, **p)
     out = whitted.probe_closest_hit(ref, **p, **rays)
-    assert [f(out, p) for _, f in truth.depth_checks()] == [None, None]
+    expected = truth.depth_range(p)
+    assert [checks.depth_visibility(out, expected, p), checks.depth_normals(out, expected, p)] == [None, None]
     wrong = dict(out, t=out["t"] * 1.01)               # the check can fail
-    assert truth.depth_checks()[0][1](wrong, p) is not None
+    assert checks.depth_visibility(wrong, expected, p) is not None
 
 
 def test07_hierarchy_is_valid_and_agrees_with_brute_force(ref):

@@ -14,7 +14,7 @@ import json
 import os
 import sys
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
@@ -57,6 +57,13 @@ def is_student_copy(stage: str) -> bool:
     return not (KIT_ROOT / "reference" / stage).is_dir() and packaged_answers_dir(stage).is_dir()
 
 
+def cache_root(cache_dir: Path | None = None) -> Path:
+    """The answer cache, private to the grader's user (no submission may read or replace an answer)."""
+    root = cache_dir or KIT_ROOT / ".cs451-cache"
+    root.mkdir(mode=0o700, exist_ok=True)
+    return root
+
+
 def _load(path: Path) -> Outputs:
     with np.load(path, allow_pickle=False) as data:
         return {k: data[k] for k in data.files}
@@ -71,17 +78,15 @@ def _store(path: Path, arrays: Outputs) -> None:
 class ReferenceAnswers:
     """The reference's answers to probes, computed once in a trusted worker and kept on disk."""
 
-    def __init__(self, stage: str, cache_dir: Path | None = None,
-                 run_reference: Callable[..., Any] | None = None):
+    def __init__(self, stage: str, cache_dir: Path | None = None):
         self.stage = stage
-        self.run_reference = run_reference
         if is_student_copy(stage):
             self.impl, self.dir = None, packaged_answers_dir(stage)
             return
         from ..impl import resolve_impl
         self.impl = resolve_impl("reference", stage)
         version = tree_hash(self.impl, KIT_ROOT / "cs451")
-        self.dir = (cache_dir or KIT_ROOT / ".cs451-cache") / "reference" / stage / version
+        self.dir = cache_root(cache_dir) / "reference" / stage / version
         self.dir.mkdir(parents=True, exist_ok=True)
 
     def path(self, probe: str, params: dict[str, Any], inputs: Outputs | None = None) -> Path:
@@ -91,10 +96,11 @@ class ReferenceAnswers:
         path = self.path(probe, params, inputs)
         if path.exists():
             return _load(path)
-        if self.impl is None or self.run_reference is None:
+        if self.impl is None:
             raise KitError(f"this copy of the kit has no reference answer for probe {probe!r} "
                            f"(its answers in {self.dir} are older than the test; ask for an updated copy)")
-        result = self.run_reference(self.stage, probe, params, inputs)
+        from .runner import run_trusted_probe  # the runner imports this module
+        result = run_trusted_probe(self.stage, self.impl, probe, params, inputs, timeout=300)
         if not result.ok:
             raise KitError(f"the reference failed on probe {probe} {params}: {result.error}\n{result.output}")
         _store(path, result.outputs)
@@ -117,7 +123,7 @@ class TruthValues:
             return
         self.live = True
         version = tree_hash(KIT_ROOT / "autograder", KIT_ROOT / "cs451")
-        self.dir = (cache_dir or KIT_ROOT / ".cs451-cache") / "truth" / stage / version
+        self.dir = cache_root(cache_dir) / "truth" / stage / version
         self.dir.mkdir(parents=True, exist_ok=True)
 
     def path(self, test: Test) -> Path:

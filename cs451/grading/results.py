@@ -62,7 +62,7 @@ def _summary_html(result: GradeResult) -> str:
                 img.thumbnail((THUMBNAIL, THUMBNAIL))
                 parts.append(f"<img alt='{key}' title='{key}' src='{_png_data_uri(np.asarray(img))}'> ")
         parts.append("</p>")
-    parts.append(f"<p>Graded {esc(result.isolation or 'in a sandbox')}.</p>")
+    parts.append(f"<p>Isolation in force: {esc(result.isolation or 'unknown')}.</p>")
     return "\n".join(parts)
 
 

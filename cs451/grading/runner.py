@@ -117,10 +117,6 @@ class _TrustedProbes:
         return run_trusted_probe(self.stage, self.impl, probe, params, inputs, timeout)
 
 
-def _reference_runner(stage: str, probe: str, params: dict[str, Any], inputs: Outputs | None) -> ProbeResult:
-    return run_trusted_probe(stage, resolve_impl(TRUSTED, stage), probe, params, inputs, timeout=300)
-
-
 # --- grading ------------------------------------------------------------------------
 
 @dataclass
@@ -201,13 +197,14 @@ def _problems(outputs: Outputs) -> list[str]:
 
 def grade(stage: str, submission: str | Path, include_hidden: bool = True, show_progress: bool = True,
           jobs: int | None = None, total_timeout: float = 600.0, tasks: list[str] | None = None,
-          test_timeout: float | None = None, protected: tuple[Path, ...] = (),
+          test_timeout: float | None = None, protected: tuple[Path, ...] = (), unwritable: tuple[Path, ...] = (),
           submission_memory: int | None = None) -> GradeResult:
     """Grade one submission of a stage; never raises for anything the submission does.
 
     ``submission``: the word ``reference`` (the kit's own, trusted), ``starter``, or a folder;
     ``tasks`` keeps only those tasks' tests; ``test_timeout`` overrides every test's time limit;
-    ``protected`` adds paths the sandbox must hide (a roster's other submissions, its output).
+    ``protected`` adds paths the sandbox must hide (a roster's other submissions, its output),
+    ``unwritable`` folders it must not write in (Gradescope's results).
     Raises ``KitError`` when the submission cannot be isolated here (it is then not run).
     """
     start = time.perf_counter()
@@ -218,7 +215,7 @@ def grade(stage: str, submission: str | Path, include_hidden: bool = True, show_
     out = GradeResult(stage, str(submission))
     if not include_hidden:
         out.hidden_not_run = hidden_summary(stage)
-    reference = ReferenceAnswers(stage, run_reference=_reference_runner)
+    reference = ReferenceAnswers(stage)
     truths = TruthValues(stage)
     if str(submission) == TRUSTED:
         out.isolation = "the kit's own reference (trusted): each test in a plain subprocess with limits"
@@ -228,7 +225,7 @@ def grade(stage: str, submission: str | Path, include_hidden: bool = True, show_
         return out
     upload = KIT_ROOT / "starter" if str(submission) == "starter" else Path(submission).expanduser()
     box = sandbox.Sandbox(stage, upload, engine_sources(stage), protected_paths(tuple(protected)),
-                          student_copy=is_student_copy(stage),
+                          unwritable=[Path(p) for p in unwritable], student_copy=is_student_copy(stage),
                           submission_memory=submission_memory or sandbox.SUBMISSION_MEMORY)
     with box:
         staged_root = box.run_dir / "upload"

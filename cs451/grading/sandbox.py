@@ -307,6 +307,7 @@ class Sandbox:
     upload: Path
     engine_sources: list[tuple[Path, str]]   # (source folder, path below the engine root) to copy in
     protected: list[Path]                    # must be unreadable from inside (checked by the canary)
+    unwritable: list[Path] = field(default_factory=list)   # folders it must not create files in (results)
     student_copy: bool = False               # no reference or hidden tests here: "none" is allowed
     mode: str = "auto"                       # auto, bubblewrap, uid, none
     submission_memory: int = SUBMISSION_MEMORY
@@ -401,17 +402,20 @@ class Sandbox:
                   "        seen.append(p)\n"
                   "    except OSError:\n"
                   "        pass\n"
-                  "try:\n"
-                  "    open(os.path.join(sys.argv[2], 'canary'), 'w').close()\n"
-                  "    wrote = True\n"
-                  "except OSError:\n"
-                  "    wrote = False\n"
+                  "wrote = []\n"
+                  "for p in [sys.argv[2]] + json.loads(sys.argv[3]):\n"
+                  "    try:\n"
+                  "        open(os.path.join(p, 'cs451-canary'), 'x').close()\n"
+                  "        wrote.append(p)\n"
+                  "    except OSError:\n"
+                  "        pass\n"
                   "import cs451\n"
                   "print(json.dumps({'seen': seen, 'wrote': wrote, 'uid': os.getuid()}))\n")
         paths = [str(p) for p in self.protected if os.path.lexists(p)]
+        folders = [str(p) for p in self.unwritable if os.path.isdir(p)]
         job = self._new_job()
         try:
-            done = self.run(["-c", script, json.dumps(paths), self.visible_upload], job,
+            done = self.run(["-c", script, json.dumps(paths), self.visible_upload, json.dumps(folders)], job,
                             Limits(wall_seconds=CANARY_SECONDS))
         except OSError as err:
             return f"could not start ({err})"
@@ -425,7 +429,9 @@ class Sandbox:
             return (f"the sandbox user can read {', '.join(answer['seen'][:3])}; make those folders private "
                     f"(mode 0700) or install bubblewrap")
         if answer["wrote"]:
-            return "the sandbox user can change the staged submission"
+            for folder in answer["wrote"][1:]:
+                (Path(folder) / "cs451-canary").unlink(missing_ok=True)
+            return f"the sandbox user can write in {answer['wrote'][0]}"
         if is_root() and answer["uid"] == 0:
             return "the worker would run as root"
         return None
@@ -538,7 +544,8 @@ class Sandbox:
         python = [sys.executable, "-B", "-s"]
         if self.mode != "bubblewrap":
             return python + python_args
-        args = ["bwrap", "--die-with-parent", "--new-session", "--unshare-all", "--cap-drop", "ALL"]
+        args = ["bwrap", "--die-with-parent", "--new-session", "--unshare-all", "--cap-drop", "ALL",
+                "--tmpfs", "/tmp", "--proc", "/proc", "--dev", "/dev"]   # first: binds below /tmp go on top
         for top in ("bin", "sbin", "lib", "lib32", "lib64", "libx32"):
             path = Path("/") / top
             if path.is_symlink():
@@ -546,15 +553,15 @@ class Sandbox:
             elif path.is_dir():
                 args += ["--ro-bind", str(path), str(path)]
         args += ["--ro-bind", "/usr", "/usr", "--ro-bind", "/etc", "/etc"]
-        for prefix in sorted({sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix}):
+        venv = os.path.dirname(os.path.dirname(sys.executable))   # as invoked: it may be a link to the prefix
+        for prefix in sorted({sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix, venv}):
             if not prefix.startswith("/usr/") and prefix != "/usr":
                 args += ["--ro-bind", prefix, prefix]
         for lib in os.environ.get("LD_LIBRARY_PATH", "").split(":"):
             if lib and os.path.isdir(lib) and not lib.startswith("/usr/"):
                 args += ["--ro-bind", lib, lib]
         args += ["--ro-bind", str(self.engine), "/kit", "--ro-bind", str(self.run_dir / "upload"), "/submission",
-                 "--bind", str(job), "/job", "--tmpfs", "/tmp", "--proc", "/proc", "--dev", "/dev",
-                 "--chdir", "/job", "--clearenv"]
+                 "--bind", str(job), "/job", "--chdir", "/job", "--clearenv"]
         for key, value in worker_env("/job", "/kit").items():
             args += ["--setenv", key, value]
         return args + ["--"] + python + python_args

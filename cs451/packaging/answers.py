@@ -12,7 +12,6 @@ from pathlib import Path
 
 from ..grading.expected import ReferenceAnswers, TruthValues, expected_for
 from ..grading.loader import load_tests
-from ..grading.runner import _reference_runner
 from ..grading.spec import Test
 from ..progress import Progress
 
@@ -20,7 +19,7 @@ from ..progress import Progress
 def answer_files(stage: str, tests: list[Test] | None = None, show_progress: bool = False) -> list[Path]:
     """Compute (or find in the cache) every answer the tests need: the reference's and the truths'; their files."""
     tests = load_tests(stage) if tests is None else tests
-    reference = ReferenceAnswers(stage, run_reference=_reference_runner)
+    reference = ReferenceAnswers(stage)
     truths = TruthValues(stage)
     files: list[Path] = []
     bar = Progress(f"answers for {stage}", len(tests)) if show_progress else None

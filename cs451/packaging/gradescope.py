@@ -50,11 +50,11 @@ else
   "$KIT/.venv/bin/python" -m pip install --progress-bar off --upgrade pip | tail -n 1
   "$KIT/.venv/bin/python" -m pip install --progress-bar off -e "$KIT" | tail -n 1
 fi
+cd "$KIT" && "$KIT/.venv/bin/python" -m cs451 autograder warm {stage}   # every answer, once per image
 chmod -R go-rwx "$KIT" && chmod 0711 "$KIT"       # the worker may pass through to its Python, and read nothing
 [ -L "$KIT/.venv" ] || chmod -R a+rX "$KIT/.venv"
 find "$SOURCE" -mindepth 1 -maxdepth 1 ! -name setup.sh ! -name run_autograder -exec rm -rf {{}} +
 chmod 0700 "$SOURCE"
-cd "$KIT" && "$KIT/.venv/bin/python" -m cs451 autograder warm {stage}   # every answer, once per image
 """
 
 RUN_AUTOGRADER = """#!/usr/bin/env bash
@@ -64,7 +64,7 @@ KIT="${{CS451_HOME:-/opt/cs451-kit}}"
 PY="${{CS451_PYTHON:-$KIT/.venv/bin/python}}"
 mkdir -p "$ROOT/results"
 cd "$KIT" && "$PY" -m cs451 autograder run {stage} --submission "$ROOT/submission" \\
-    --results "$ROOT/results/results.json"
+    --results "$ROOT/results/results.json" "$@"
 status=$?
 if [ ! -s "$ROOT/results/results.json" ]; then   # the grader itself died: still leave a result, and say so
   printf '{{"score": 0, "output": "The autograder stopped unexpectedly (exit %s). This is not a verdict on your code; tell your instructor.", "tests": []}}' "$status" > "$ROOT/results/results.json"
@@ -105,8 +105,10 @@ GRADESCOPE_SUBMISSION_MEMORY = 448 << 20
 
 
 def run_gradescope(stage: str, submission: str | Path, results: str | Path,
-                   budget: float = GRADESCOPE_BUDGET) -> int:
-    """Grade one Gradescope submission into ``results`` (results.json); always writes it."""
+                   budget: float = GRADESCOPE_BUDGET, tasks: list[str] | None = None) -> int:
+    """Grade one Gradescope submission into ``results`` (results.json); always writes it.
+
+    ``tasks`` keeps only those tasks' tests (the kit's own tests use it; Gradescope never passes it)."""
     from ..grading.results import write_failure, write_results
     from ..grading.runner import grade
     results = Path(results)
@@ -114,7 +116,9 @@ def run_gradescope(stage: str, submission: str | Path, results: str | Path,
     root = Path(os.environ.get("AUTOGRADER_ROOT", "/autograder"))
     try:
         result = grade(stage, Path(submission), include_hidden=True, show_progress=False, jobs=1, total_timeout=budget,
-                       protected=(results.parent, root / "source"), submission_memory=GRADESCOPE_SUBMISSION_MEMORY)
+                       tasks=tasks,
+                       protected=(root / "source",), unwritable=(results.parent,),
+                       submission_memory=GRADESCOPE_SUBMISSION_MEMORY)
     except SubmissionError as err:  # nothing gradable was uploaded: say what is expected
         write_failure(results, str(err), blame_submission=True)
         return 0
@@ -129,11 +133,7 @@ def run_gradescope(stage: str, submission: str | Path, results: str | Path,
 
 
 def unpack_like_gradescope(zip_path: Path, top: Path) -> Path:
-    """Unpack an autograder zip into ``top/autograder/source`` as Gradescope does; returns ``top/autograder``.
-
-    For the kit's tests and benchmarks, which run ``run_autograder`` outside Gradescope.
-    Folders are made world-readable, as the unprivileged worker must enter them.
-    """
+    """Unpack an autograder zip into ``top/autograder/source`` as Gradescope does; returns ``top/autograder``."""
     root = top / "autograder"
     (root / "source").mkdir(parents=True, exist_ok=True)
     with zipfile.ZipFile(zip_path) as zf:
@@ -146,7 +146,24 @@ def unpack_like_gradescope(zip_path: Path, top: Path) -> Path:
     return root
 
 
-def simulated_env(root: Path, python: str) -> dict[str, str]:
-    """The environment that points ``run_autograder`` at an unpacked layout and an installed Python."""
-    return {**os.environ, "AUTOGRADER_ROOT": str(root), "CS451_HOME": str(root / "source"), "CS451_PYTHON": python}
+def simulated_env(root: Path, venv: str) -> dict[str, str]:
+    """The environment for the zip's own scripts in ``root`` (``top/autograder``), outside Gradescope.
 
+    The kit goes to ``top/opt/cs451-kit`` as setup.sh would put it in ``/opt``; the system packages
+    are taken as installed and the Python environment ``venv`` is reused (building one takes minutes).
+    """
+    kit = root.parent / "opt" / "cs451-kit"
+    return {**os.environ, "AUTOGRADER_ROOT": str(root), "CS451_HOME": str(kit), "CS451_SKIP_SYSTEM_PACKAGES": "1",
+            "CS451_VENV": venv, "CS451_PYTHON": str(kit / ".venv" / "bin" / "python")}
+
+
+def setup_like_gradescope(zip_path: Path, top: Path, venv: str) -> tuple[Path, dict[str, str]]:
+    """Unpack the zip and run its own setup.sh as Gradescope would; returns ``top/autograder`` and the environment."""
+    import subprocess
+    root = unpack_like_gradescope(zip_path, top)
+    env = simulated_env(root, venv)
+    (root.parent / "opt").mkdir(exist_ok=True)
+    done = subprocess.run([str(root / "source" / "setup.sh")], env=env, capture_output=True, text=True, timeout=1800)
+    if done.returncode != 0:
+        raise KitError(f"the autograder's setup.sh failed (exit {done.returncode}): {done.stderr[-2000:]}")
+    return root, env
