@@ -24,7 +24,7 @@ def _cmd_grade(a: argparse.Namespace) -> int:
     if a.roster:
         from .grading.roster import grade_roster
         path = grade_roster(stage=a.stage, roster=a.roster, output=a.report or "grades",
-                            include_hidden=not a.public_only, parallel=a.jobs)
+                            include_hidden=not a.public_only, parallel=a.jobs, only=_tasks(a.tasks))
         print(f"wrote {path} and one report per student beside it")
         return 0
     from .grading.report import write_report

@@ -91,7 +91,7 @@ SUBDIVIDE_CHECKS = all_of([("the grid of the handout", sub(checks.subdivide_exac
 def subdivide_test(name, points, quads, max_edge) -> Test:
     return Test(name, "R1", points, "subdivide", {"quads": quads, "max_edge": max_edge}, SUBDIVIDE_CHECKS,
                 "corners within 1e-9 (relative) of the bilinear grid; areas within 1e-5", expected="none",
-                truth=truth(truths.subdivision), timeout=QUICK)
+                truth=truth(truths.subdivision), edge_case=max_edge <= 0, timeout=QUICK)
 
 
 def shoot_test(name, points, system, i, radiosity=None, unshot=None) -> Test:

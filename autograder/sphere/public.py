@@ -64,7 +64,8 @@ def shader_test(name, task, points, scene, size) -> Test:
 
 RESHAPE_CHECKS = all_of([("viewport covers the window", sub(checks.reshape_viewport)),
                          ("aspect ratio kept", sub(checks.reshape_aspect)),
-                         ("vertical field of view kept", sub(checks.reshape_fovy))])
+                         ("vertical field of view kept", sub(checks.reshape_fovy))],
+                        earn_with=["viewport covers the window", "vertical field of view kept"])
 
 
 def reshape_test(name, points, **params) -> Test:

@@ -55,13 +55,10 @@ class TestGroup:
         return int(text) if text.isdigit() else 0
 
     def out_of_memory(self) -> bool:
-        """Whether the kernel refused or killed for memory in this group."""
-        if self.version == 2:
-            events = dict(line.split() for line in _read(self.memory / "memory.events").splitlines()
-                          if len(line.split()) == 2)
-            return int(events.get("oom_kill", "0")) > 0
-        failcnt = _read(self.memory / "memory.failcnt").strip()
-        return "oom_kill 1" in _read(self.memory / "memory.oom_control") or (failcnt.isdigit() and int(failcnt) > 0)
+        """Whether the kernel killed a process of this group for memory."""
+        name = "memory.events" if self.version == 2 else "memory.oom_control"
+        counts = dict(line.split() for line in _read(self.memory / name).splitlines() if len(line.split()) == 2)
+        return counts.get("oom_kill", "0").isdigit() and int(counts.get("oom_kill", "0")) > 0
 
     def kill_all(self) -> None:
         """SIGKILL every process in the group until none is left (a fork in flight joins the group)."""

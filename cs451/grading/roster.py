@@ -33,7 +33,7 @@ def find_submissions(roster: Path) -> list[Path]:
 
 
 def grade_roster(*, stage: str, roster: str | Path, output: str | Path, include_hidden: bool = True,
-                 parallel: int | None = None, show_progress: bool = True) -> Path:
+                 parallel: int | None = None, show_progress: bool = True, only: list[str] | None = None) -> Path:
     """Grade every submission under ``roster``; write ``output/gradebook.csv`` and ``output/<student>/``."""
     roster, output = Path(roster), Path(output)
     tasks = [t.id for t in get_stage(stage).tasks]
@@ -46,7 +46,7 @@ def grade_roster(*, stage: str, roster: str | Path, output: str | Path, include_
     workers = 1 if not _namespaces_available() else (parallel or max(1, (os.cpu_count() or 1)))
     context = multiprocessing.get_context("fork" if hasattr(os, "fork") else "spawn")
     with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-        futures = {pool.submit(_grade_one, stage, sub, output / sub.name, include_hidden, tasks, protected): sub
+        futures = {pool.submit(_grade_one, stage, sub, output / sub.name, include_hidden, tasks, protected, only): sub
                    for sub in subs}
         for future in as_completed(futures):
             sub = futures[future]
@@ -82,10 +82,11 @@ def _namespaces_available() -> bool:
 
 
 def _grade_one(stage: str, sub: Path, folder: Path, include_hidden: bool, tasks: list[str],
-               protected: tuple[Path, ...]) -> dict:
+               protected: tuple[Path, ...], only: list[str] | None) -> dict:
     """In a grading process of its own: one submission's results, report and gradebook row."""
     try:
-        result = grade(stage, sub, include_hidden=include_hidden, show_progress=False, jobs=1, protected=protected)
+        result = grade(stage, sub, include_hidden=include_hidden, show_progress=False, jobs=1, protected=protected,
+                       tasks=only)
     except Exception as err:  # one broken submission (or folder) never stops the batch
         write_failure(folder / "results.json", f"{type(err).__name__}: {err}")
         return {"student": sub.name, "score": 0, "max_score": "", "seconds": "", "problems": str(err)}

@@ -47,13 +47,14 @@ class ProbeResult:
     seconds: float
 
 
-def _interpret(done: sandbox.Completed, job: Path, timeout: float, seconds: float) -> ProbeResult:
+def _interpret(done: sandbox.Completed, job: Path, timeout: float, seconds: float,
+               memory: int = sandbox.SUBMISSION_MEMORY) -> ProbeResult:
     """What a finished worker means, from its exit and the files it left (read as hostile data)."""
+    if done.out_of_memory:
+        return ProbeResult(False, {}, f"the submission ran out of memory (everything it starts may use "
+                                      f"{memory >> 20} MiB together)", done.output, seconds)
     if done.timed_out:
         return ProbeResult(False, {}, f"took longer than the {timeout:g} s limit (an infinite loop?)", done.output, seconds)
-    if done.out_of_memory:
-        return ProbeResult(False, {}, f"the submission ran out of memory (everything it started may use "
-                                      f"{sandbox.SUBMISSION_MEMORY >> 20} MiB together)", done.output, seconds)
     try:
         ok, error = read_status(job / "status.json")
         outputs = read_arrays(job / "output.npz") if ok else {}
@@ -104,7 +105,7 @@ class _SandboxedProbes:
         try:
             _write_request(job, self.stage, self.impl, probe, params, inputs)
             done = self.box.run(self.box.worker_args(job), job, sandbox.Limits(wall_seconds=timeout))
-            return _interpret(done, job, timeout, time.perf_counter() - start)
+            return _interpret(done, job, timeout, time.perf_counter() - start, self.box.submission_memory)
         finally:
             self.box.finish_job(job)
 
@@ -232,7 +233,8 @@ def grade(stage: str, submission: str | Path, include_hidden: bool = True, show_
         try:
             impl = resolve_impl(staged_root, stage)
         except SubmissionError as err:
-            raise SubmissionError(str(err).replace(str(staged_root), str(upload))) from None
+            skipped = f" ({box.staged.note()})" if box.staged.note() else ""
+            raise SubmissionError(str(err).replace(str(staged_root), str(upload)) + skipped) from None
         out.isolation = box.describe()
         if box.staged.note():
             out.problems.append(box.staged.note())
@@ -285,4 +287,17 @@ def _grade_tests(out: GradeResult, tests: list[Test], probes: Any, reference: Re
                 bar.advance(note=tests[i].number)
     if bar:
         bar.close()
-    out.results = [results[i] for i in range(len(tests))]
+    out.results = _edge_cases_need_the_main_tests([results[i] for i in range(len(tests))])
+
+
+def _edge_cases_need_the_main_tests(results: list[TestResult]) -> list[TestResult]:
+    """An edge case whose right answer is to do nothing (max_edge 0 keeps the quads) earns its points only
+    when some other test of its task earns points: a submission that does nothing earns nothing."""
+    earning = {r.test.task for r in results if not r.test.edge_case and r.score > 0}
+    out = []
+    for r in results:
+        if r.test.edge_case and r.score > 0 and r.test.task not in earning:
+            r = TestResult(r.test, 0.0, Verdict(0.0, f"{r.verdict.message}; but this edge case counts only once another "
+                                                     f"{r.test.task} test passes"), r.output, r.seconds)
+        out.append(r)
+    return out

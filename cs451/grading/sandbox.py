@@ -538,7 +538,10 @@ class Sandbox:
         log_path.unlink()
         if uid is not None and self.mode == "uid":
             self._sweep(uid)
-        return Completed(proc.returncode, text, timed_out, out_of_memory, peak)
+        code = proc.returncode
+        if self.mode == "bubblewrap" and code is not None and 128 < code <= 128 + 64:
+            code = 128 - code   # bwrap exits with 128 + the signal that ended the worker: give it back as a signal
+        return Completed(code, text, timed_out, out_of_memory, peak)
 
     def _command(self, python_args: list[str], job: Path) -> list[str]:
         python = [sys.executable, "-B", "-s"]

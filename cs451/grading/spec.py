@@ -122,6 +122,7 @@ class Test:
     expected: Literal["reference", "none"] = "reference"  # run the same probe on the reference for the truth?
     given: str | None = None        # a reference probe whose outputs feed the submission's probe (trusted inputs)
     truth: Ref | None = None
+    edge_case: bool = False         # its right answer is a do-nothing one: it counts only beside a passing main test
     hidden: bool = False
     timeout: float = 60.0
     number: str = ""                # filled in by the loader: "S1.2"
@@ -136,10 +137,11 @@ class Test:
         return {"name": self.name, "task": self.task, "points": self.points, "probe": self.probe,
                 "params": self.params, "check": self.check.to_json(), "tolerance": self.tolerance,
                 "expected": self.expected, "given": self.given, "truth": self.truth.to_json() if self.truth else None,
-                "timeout": self.timeout}
+                "edge_case": self.edge_case, "timeout": self.timeout}
 
     @staticmethod
     def from_json(data: dict[str, Any]) -> "Test":
         return Test(data["name"], data["task"], float(data["points"]), data["probe"], data["params"],
                     Ref.from_json(data["check"]), data["tolerance"], data["expected"], data.get("given"),
-                    Ref.from_json(data["truth"]) if data.get("truth") else None, False, float(data["timeout"]))
+                    Ref.from_json(data["truth"]) if data.get("truth") else None, bool(data.get("edge_case")), False,
+                    float(data["timeout"]))

@@ -168,7 +168,7 @@ def make_patches(scene: Scene, impl: Any, patch_size: float) -> Patches:
     from ..patches import patch_areas
 
     quads, reflectance, emission, labels = scene_polygons(scene)
-    patches, parent = subdivide(impl, quads, patch_size)
+    patches, parent = call_subdivide(impl, quads, patch_size)
     p = Patches(patches, parent, patch_areas(patches), reflectance[parent], emission[parent], quads, labels)
     check_patches(p, scene.source or scene.name or "<scene>")
     return p
@@ -176,7 +176,7 @@ def make_patches(scene: Scene, impl: Any, patch_size: float) -> Patches:
 
 # --- calling the student's functions, with checks on what they return ------------
 
-def subdivide(impl: Any, quads: np.ndarray, max_edge: float) -> tuple[np.ndarray, np.ndarray]:
+def call_subdivide(impl: Any, quads: np.ndarray, max_edge: float) -> tuple[np.ndarray, np.ndarray]:
     out = student_call(STAGE, impl, "R1", np.array(quads, dtype=np.float64), float(max_edge))
     if not isinstance(out, (tuple, list)) or len(out) != 2:
         raise KitError("R1 subdivide() must return (patches, parent)")
@@ -187,7 +187,7 @@ def subdivide(impl: Any, quads: np.ndarray, max_edge: float) -> tuple[np.ndarray
     return patches, parent
 
 
-def shoot(impl: Any, i: int, row: np.ndarray, areas: np.ndarray, reflectance: np.ndarray,
+def call_shoot(impl: Any, i: int, row: np.ndarray, areas: np.ndarray, reflectance: np.ndarray,
           radiosity: np.ndarray, unshot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     n = len(areas)
     out = student_call(STAGE, impl, "R2", int(i), row.copy(), areas.copy(), reflectance.copy(), radiosity.copy(), unshot.copy())
@@ -196,12 +196,12 @@ def shoot(impl: Any, i: int, row: np.ndarray, areas: np.ndarray, reflectance: np
     return as_array(out[0], (n, 3), "R2 shoot() radiosity"), as_array(out[1], (n, 3), "R2 shoot() unshot")
 
 
-def ambient(impl: Any, areas: np.ndarray, reflectance: np.ndarray, unshot: np.ndarray) -> np.ndarray:
+def call_ambient(impl: Any, areas: np.ndarray, reflectance: np.ndarray, unshot: np.ndarray) -> np.ndarray:
     return as_array(student_call(STAGE, impl, "R4", areas.copy(), reflectance.copy(), unshot.copy()), (3,),
                     "R4 ambient_term()")
 
 
-def vertex_colors(impl: Any, quads: np.ndarray, parent: np.ndarray, radiosity: np.ndarray
+def call_vertex_colors(impl: Any, quads: np.ndarray, parent: np.ndarray, radiosity: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     out = student_call(STAGE, impl, "R5", quads.copy(), parent.copy(), radiosity.copy())
     if not isinstance(out, (tuple, list)) or len(out) != 3:
@@ -324,7 +324,7 @@ def solve_progressive(impl: Any, rows: Any, areas: np.ndarray, reflectance: np.n
     order = [int(i) for i in as_array(np.asarray(list(out[2])).reshape(-1), (None,), "R3 progressive_refinement() order", kind="i")]
     emitted = energy(emission, areas)
     residual = energy(unshot, areas) / emitted if emitted > 0 else 0.0
-    display = radiosity + reflectance * ambient(impl, areas, reflectance, unshot) if use_ambient else radiosity
+    display = radiosity + reflectance * call_ambient(impl, areas, reflectance, unshot) if use_ambient else radiosity
     counters = dict(getattr(rows, "counters", {}))
     counters.update(patches=n, shots=len(order), distinct_shooters=len(set(order)), rows_requested=len(fetched),
                     patches_never_shot=n - len(set(order)),
@@ -493,7 +493,7 @@ def draw_solution(scene: Scene, impl: Any, patches: Patches, display: np.ndarray
                   exposure: float = 1.0, drawer: GouraudDrawer | None = None) -> np.ndarray:
     """The Gouraud-shaded image of per-patch radiosities (shown as radiance B/π), through the student's R5."""
     width, height = size or (scene.image.width, scene.image.height)
-    positions, colors, corners = vertex_colors(impl, patches.quads, patches.parent, display)
+    positions, colors, corners = call_vertex_colors(impl, patches.quads, patches.parent, display)
     drawer = drawer or GouraudDrawer()
     return drawer.draw(positions, colors * (exposure / math.pi), corners, camera_matrix(scene, width, height),
                        width, height, scene.image.background)
@@ -512,14 +512,14 @@ def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, verbose
 # --- probes: what the autograder's worker asks a submission for -----------------------
 
 def probe_subdivide(impl: Any, quads: list, max_edge: float) -> dict[str, np.ndarray]:
-    patches, parent = subdivide(impl, np.asarray(quads, dtype=np.float64), max_edge)
+    patches, parent = call_subdivide(impl, np.asarray(quads, dtype=np.float64), max_edge)
     return {"patches": patches, "parent": parent}
 
 
 def probe_shoot(impl: Any, i: int, F: list, areas: list, reflectance: list, radiosity: list, unshot: list
                 ) -> dict[str, np.ndarray]:
     F_ = np.asarray(F, dtype=np.float64)
-    B, dB = shoot(impl, i, F_[i], np.asarray(areas, float), np.asarray(reflectance, float),
+    B, dB = call_shoot(impl, i, F_[i], np.asarray(areas, float), np.asarray(reflectance, float),
                   np.asarray(radiosity, float), np.asarray(unshot, float))
     return {"radiosity": B, "unshot": dB}
 
@@ -545,11 +545,11 @@ def probe_progressive(impl: Any, tolerance: float, max_shots: int, overshoot: fl
 
 
 def probe_ambient(impl: Any, areas: list, reflectance: list, unshot: list) -> dict[str, np.ndarray]:
-    return {"ambient": ambient(impl, np.asarray(areas, float), np.asarray(reflectance, float), np.asarray(unshot, float))}
+    return {"ambient": call_ambient(impl, np.asarray(areas, float), np.asarray(reflectance, float), np.asarray(unshot, float))}
 
 
 def probe_vertex_colors(impl: Any, quads: list, parent: list, radiosity: list) -> dict[str, np.ndarray]:
-    positions, colors, corners = vertex_colors(impl, np.asarray(quads, float), np.asarray(parent, dtype=np.int64),
+    positions, colors, corners = call_vertex_colors(impl, np.asarray(quads, float), np.asarray(parent, dtype=np.int64),
                                                np.asarray(radiosity, float))
     return {"positions": positions, "colors": colors, "corners": corners}
 
