@@ -16,10 +16,11 @@ apt_install() {
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "$@" >/dev/null
 }
 
-# Mesa's EGL driver: headless OpenGL on the CPU (llvmpipe), no GPU or display needed.
+# Mesa's EGL driver: headless OpenGL on the CPU (llvmpipe), no GPU or display needed;
+# bubblewrap: the autograder's sandbox (namespaces) for grading anyone's code but your own.
 missing=()
 if command -v dpkg >/dev/null 2>&1; then
-  for pkg in libegl1 libegl-mesa0 libgl1-mesa-dri libglu1-mesa; do
+  for pkg in libegl1 libegl-mesa0 libgl1-mesa-dri libglu1-mesa bubblewrap; do
     dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
   done
 fi

@@ -15,6 +15,7 @@ import json
 import os
 import shutil
 import stat
+import subprocess
 import tempfile
 import uuid
 from dataclasses import dataclass
@@ -99,7 +100,8 @@ def run_roster(folder: Path) -> Outcome:
     """The attack in a class folder beside an honest classmate, who must keep full marks."""
     top = world_readable_dir("cs451-class-")
     try:
-        shutil.copytree(folder, top / "class" / "mallory", symlinks=True)
+        (top / "class").mkdir()
+        subprocess.run(["cp", "-a", str(folder), str(top / "class" / "mallory")], check=True)
         shutil.copytree(KIT_ROOT / "reference" / "sphere", top / "class" / "alice" / "sphere",
                         ignore=shutil.ignore_patterns("__pycache__"))
         grade_roster(stage="sphere", roster=top / "class", output=top / "grades", show_progress=False, only=TASKS)

@@ -1,5 +1,7 @@
 """The corpus of bad submissions: each gets a fair score and a message, and the grader survives it.
 
+(Hostile ones, which reach for what the grader keeps, are in ``test_attacks.py``.)
+
 Each case breaks ``perspective`` (task S1) of an otherwise correct copy of the reference, and
 grades S1 and S2: S1 must score what the table says, with the message, and S2 must keep its
 full marks (one bad function never costs another task's points).
@@ -16,7 +18,6 @@ from pathlib import Path
 import pytest
 
 from cs451 import KIT_ROOT
-from cs451.grading import sandbox
 from cs451.grading.runner import grade
 
 ORIGINAL = "    f = 1.0 / np.tan(np.radians(fovy) / 2.0)\n"
@@ -52,18 +53,6 @@ CASES = {
     "slow but correct": ("    import time\n    time.sleep(1.0)\n" + CORRECT_TAIL, 1, "matches"),
     "prints a lot but correct": ("    print('debug ' * 2000)\n" + CORRECT_TAIL, 1, "matches"),
 }
-ROOT_ONLY = {
-    "reads the reference": ("    open(" + repr(str(KIT_ROOT / "reference" / "sphere" / "camera.py")) + ").read()\n", 0,
-                            "Permission denied"),
-    "imports the reference": ("    import sys\n    sys.path.insert(0, " + repr(str(KIT_ROOT)) + ")\n"
-                              "    import reference.sphere\n", 0, "reference"),
-    "reads the hidden tests": ("    open(" + repr(str(KIT_ROOT / "autograder" / "sphere" / "hidden.py")) + ").read()\n", 0,
-                               "Permission denied"),
-    "reads cached reference answers": ("    import os\n    os.listdir(" + repr(str(KIT_ROOT / ".cs451-cache" / "reference")) +
-                                       ")\n", 0, "Permission denied"),
-}
-
-
 @pytest.fixture(scope="module")
 def corpus_dir():
     """World-readable, so that a root grader's unprivileged worker can import the submissions."""
@@ -103,14 +92,6 @@ def run_case(root: Path, name: str, code: str, fraction: float, fragment: str):
 @pytest.mark.parametrize("name", list(CASES))
 def test01_bad_submission_is_scored_fairly(corpus_dir, name):
     run_case(corpus_dir, name, *CASES[name])
-
-
-@pytest.mark.skipif(not sandbox.is_root(), reason="file isolation needs a root grader that drops to 'nobody'")
-@pytest.mark.parametrize("name", list(ROOT_ONLY))
-def test02_submission_cannot_read_what_the_grader_keeps(corpus_dir, name):
-    grade("sphere", "reference", show_progress=False, tasks=["S1"])  # make sure cached answers exist
-    result = run_case(corpus_dir, name, *ROOT_ONLY[name])
-    assert "as 'nobody'" in result.isolation
 
 
 def test03_missing_function_and_wrong_signature_are_named(corpus_dir):

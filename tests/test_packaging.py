@@ -32,8 +32,8 @@ def run_autograder(layout: tuple[Path, dict], files: Path | None, *args: str) ->
     for sub in ("submission", "results"):
         shutil.rmtree(root / sub, ignore_errors=True)
         (root / sub).mkdir()
-    if files is not None:
-        shutil.copytree(files, root / "submission", dirs_exist_ok=True, symlinks=True)
+    if files is not None:  # as uploaded: links, FIFOs and modes kept
+        subprocess.run(["cp", "-a", f"{files}/.", str(root / "submission")], check=True)
     done = subprocess.run([str(root / "source" / "run_autograder"), *args], env=env, capture_output=True, text=True,
                           timeout=600)
     assert done.returncode == 0, done.stderr
