@@ -108,7 +108,7 @@ def run_case(ref: Any, scene_name: str, patch_size: float, resolution: int) -> d
     for label, use_ambient, overshoot in VARIANTS:
         rows = R.MatrixRows(F)                                  # the same rows, counted as they are first asked for
         checkpoints = set(int(round(x)) for x in np.geomspace(1, 200 * n, 120))
-        curve = [(0.0, relative_error(E + (rho * R.ambient(ref, a, rho, E) if use_ambient else 0), truth, a, mask), 0)]
+        curve = [(0.0, relative_error(E + (rho * R.call_ambient(ref, a, rho, E) if use_ambient else 0), truth, a, mask), 0)]
         excluded = [0.0]
         begin = time.perf_counter()
 
@@ -116,7 +116,7 @@ def run_case(ref: Any, scene_name: str, patch_size: float, resolution: int) -> d
             if k not in checkpoints:
                 return
             t0 = time.perf_counter()
-            shown = B + rho * R.ambient(ref, a, rho, dB) if use_ambient else B
+            shown = B + rho * R.call_ambient(ref, a, rho, dB) if use_ambient else B
             used = rows.counters["rows_computed"]
             curve.append((t0 - begin - excluded[0] + used * row_seconds, relative_error(shown, truth, a, mask), used))
             excluded[0] += time.perf_counter() - t0
@@ -169,7 +169,7 @@ def run_substructured(ref: Any, scene_name: str, patch_size: float, resolution: 
         def on_shot(shots: int, p: int, B: np.ndarray, dB: np.ndarray) -> None:
             t0 = time.perf_counter()
             shooters.add(p)
-            shown = B + rho * R.ambient(ref, a, rho, dB) if use_ambient else B
+            shown = B + rho * R.call_ambient(ref, a, rho, dB) if use_ambient else B
             curve.append((t0 - begin - excluded[0] + len(shooters) * row_seconds,
                           relative_error(shown, truth, a, mask), len(shooters)))
             excluded[0] += time.perf_counter() - t0

@@ -218,7 +218,7 @@ def cornell_patches(size: float) -> tuple[np.ndarray, np.ndarray]:
     """The Cornell box's polygons subdivided by the reference R1: (patches, parent polygon)."""
     from cs451.stages import radiosity as R
     quads, _, _ = scene_polygons(load_scene("cornell-box"))
-    return R.subdivide(load_impl(resolve_impl("reference", "radiosity"), "radiosity"), quads, size)
+    return R.call_subdivide(load_impl(resolve_impl("reference", "radiosity"), "radiosity"), quads, size)
 
 
 def test15_the_floor_sees_the_light_not_the_ceiling_behind_it(ref):

@@ -75,7 +75,7 @@ def test03_furnace_ambient_preview_is_exact_before_the_first_shot(furnace_fine):
     quads, F = furnace_fine
     n, rho = len(quads), 0.8
     A = patch_areas(quads)
-    preview = uniform(n, 1.0) + uniform(n, rho) * R.ambient(REF, A, uniform(n, rho), uniform(n, 1.0))
+    preview = uniform(n, 1.0) + uniform(n, rho) * R.call_ambient(REF, A, uniform(n, rho), uniform(n, 1.0))
     assert np.allclose(preview, truth.furnace(1.0, rho), rtol=1e-12)
     worse = []
 
@@ -180,7 +180,7 @@ HAND = {  # three patches: an emitter over two receivers, reciprocity A_i F_ij =
 
 def test08_one_shot_matches_the_hand_worked_numbers():
     F = np.array(HAND["F"])
-    B, dB = R.shoot(REF, 0, F[0], np.array(HAND["areas"]), np.array(HAND["reflectance"]),
+    B, dB = R.call_shoot(REF, 0, F[0], np.array(HAND["areas"]), np.array(HAND["reflectance"]),
                     np.array(HAND["emission"]), np.array(HAND["emission"]))
     # patch 1: ρ ΔB_0 F_01 A_0/A_1 = (0.5·10, 0.4·5, 0.3·2) · 0.3 · 2 = (3, 1.2, 0.36)
     assert np.allclose(B[1], [3.0, 1.2, 0.36]) and np.allclose(dB[1], [3.0, 1.2, 0.36])
@@ -295,7 +295,7 @@ def test15_a_solve_that_cannot_converge_says_so_and_returns_its_best_state(furna
 
 def test16_subdivision_keeps_area_orientation_and_edge_lengths():
     quads, _, _, _ = R.scene_polygons(load_scene("cornell-box"))
-    patches, parent = R.subdivide(REF, quads, 50.0)
+    patches, parent = R.call_subdivide(REF, quads, 50.0)
     # the published red wall is not quite planar (its subdivided area differs by 3e-6); the others are exact
     assert np.allclose(np.bincount(parent, weights=patch_areas(patches)), patch_areas(quads), rtol=1e-5)
     # (its sub-patches' normals turn by up to 0.15°; every other wall's are its own to rounding)
@@ -304,16 +304,16 @@ def test16_subdivision_keeps_area_orientation_and_edge_lengths():
     edges = np.linalg.norm(patches - np.roll(patches, -1, axis=1), axis=2)
     assert edges.max() <= 50.0 + 1e-9
     triangle = np.array([[[0, 0, 0], [4, 0, 0], [0, 3, 0], [0, 3, 0]]], dtype=float)
-    small, _ = R.subdivide(REF, triangle, 1.0)
+    small, _ = R.call_subdivide(REF, triangle, 1.0)
     assert np.isclose(patch_areas(small).sum(), 6.0) and np.all(patch_areas(small) > 0)
 
 
 def test17_vertex_colours_are_the_average_of_adjoining_patches_of_the_same_polygon():
     quads, _, _, _ = R.scene_polygons(load_scene("furnace"))
-    patches, parent = R.subdivide(REF, quads[:3], 0.34)
+    patches, parent = R.call_subdivide(REF, quads[:3], 0.34)
     rng = np.random.default_rng(1)
     radiosity = rng.uniform(0, 1, (len(patches), 3))
-    positions, colors, corners = R.vertex_colors(REF, patches, parent, radiosity)
+    positions, colors, corners = R.call_vertex_colors(REF, patches, parent, radiosity)
     assert np.allclose(positions[corners], patches)
     assert np.allclose(colors[corners], truth.corner_colors_by_hand(patches, parent, radiosity))
     assert len(positions) == 3 * 16, "corners of different polygons must stay apart"

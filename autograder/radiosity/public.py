@@ -159,7 +159,7 @@ TESTS = [
     shoot_test("R2 shoot: a receiver shoots back, B and ΔB already set", 5, HAND, 1,
                radiosity=[[10.0, 5.0, 2.0], [3.0, 1.2, 0.36], [1.6, 0.2, 0.24]],
                unshot=[[0.0, 0.0, 0.0], [3.0, 1.2, 0.36], [1.6, 0.2, 0.24]]),
-    by_hand_test("R3 progressive_refinement: the hand-worked scene, 3 shots", 6, HAND, 3),
+    by_hand_test("R3 progressive_refinement: the hand-worked scene, 4 shots (patch 1 shoots twice)", 6, HAND, 4),
     by_hand_test("R3 progressive_refinement: the hand-worked scene to 1e-6", 5, HAND, 10_000, tolerance=1e-6),
     furnace_test("R3 progressive_refinement: the furnace, ρ = 0.9", 6, 0.9, 1e-4),
     scene_solve_test("R3 progressive_refinement: the Cornell box converges to the direct solve", 8, CORNELL, 140.0),

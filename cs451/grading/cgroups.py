@@ -101,8 +101,9 @@ def _version() -> int | None:
 
 
 def create(memory_bytes: int, max_pids: int) -> TestGroup | None:
-    """A fresh cgroup with the caps, or None where this machine does not let us make one."""
-    if os.name != "posix" or os.geteuid() != 0:
+    """A fresh cgroup with the caps, or None where this machine does not let us make one (or ``CS451_NO_CGROUP`` is set,
+    which the kit's tests use to run the watchdog that stands in for it)."""
+    if os.name != "posix" or os.geteuid() != 0 or os.environ.get("CS451_NO_CGROUP"):
         return None
     version = _version()
     name = f"cs451-{uuid.uuid4().hex[:12]}"

@@ -92,6 +92,8 @@ def format_table(result: GradeResult, width: int = 100) -> str:
         acc[1] += r.test.points
     lines.append("by task: " + "  ".join(f"{k} {v[0]:g}/{v[1]:g}" for k, v in by_task.items()))
     lines.append(f"total: {result.score:g} / {result.max_score:g}   ({result.seconds:.1f} s)")
+    if result.isolation:
+        lines.append(f"isolation: {result.isolation}")
     if result.hidden_not_run.get("count"):
         from .report import hidden_note
         lines.append(f"not run here: {hidden_note(result)}")

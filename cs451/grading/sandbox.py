@@ -96,6 +96,7 @@ def worker_env(home: str, engine: str) -> dict[str, str]:
     env = {k: os.environ[k] for k in keep if k in os.environ}
     env.setdefault("PATH", "/usr/bin:/bin")
     env.setdefault("EGL_PLATFORM", "surfaceless")
+    env.setdefault("LP_NUM_THREADS", "2")   # llvmpipe starts one thread per core otherwise: past the process cap on big hosts
     env.update(HOME=home, TMPDIR=home, PYTHONDONTWRITEBYTECODE="1", PYTHONHASHSEED="0", PYTHONNOUSERSITE="1",
                PYTHONPATH=engine, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MESA_SHADER_CACHE_DISABLE="true",
                NUMBA_CACHE_DIR=home)

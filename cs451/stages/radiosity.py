@@ -606,10 +606,10 @@ def _demo(module: Any, output: Path, window: bool, frames: int | None, scene_nam
     pictures: list[np.ndarray] = []
 
     def panels(B: np.ndarray, dB: np.ndarray) -> list[np.ndarray]:
-        shown = [B, B + rho * ambient(module, a, rho, dB)]
+        shown = [B, B + rho * call_ambient(module, a, rho, dB)]
         out = []
         for k, values in enumerate(shown):
-            positions, colors, corners = vertex_colors(module, patches.quads, patches.parent, values)
+            positions, colors, corners = call_vertex_colors(module, patches.quads, patches.parent, values)
             scaled = colors * (opts.exposure / math.pi)
             if gl_window is not None:
                 drawer.draw(positions, scaled, corners, mvp, width, height, scene.image.background, gl_window.ctx.screen,
