@@ -6,16 +6,19 @@ Errors a user can fix print as one line, without a traceback, and exit with 2.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
+from . import __version__
 from .errors import KitError
 
 
 def _cmd_render(a: argparse.Namespace) -> int:
+    from .copy import default_impl
     from .render import render_scene
-    path, seconds = render_scene(scene=a.scene, output=a.output, impl=a.impl, size=a.size, stage=a.stage,
-                                 shading=a.shading)
+    path, seconds = render_scene(scene=a.scene, output=a.output, impl=a.impl or default_impl(), size=a.size,
+                                 stage=a.stage, shading=a.shading)
     print(f"wrote {path} ({seconds:.2f} s)")
     return 0
 
@@ -32,7 +35,9 @@ def _cmd_grade(a: argparse.Namespace) -> int:
     from .grading.results import write_failure
     from .grading.runner import grade
     try:
-        result = grade(a.stage, a.submission, include_hidden=not a.public_only, jobs=a.jobs, tasks=_tasks(a.tasks))
+        from .copy import default_submission
+        result = grade(a.stage, a.submission or default_submission(), include_hidden=not a.public_only, jobs=a.jobs,
+                       tasks=_tasks(a.tasks))
     except BaseException as err:  # a results file is always written, with the reason, before we fail
         if a.results:
             write_failure(a.results, f"{type(err).__name__}: {err}")
@@ -69,7 +74,8 @@ def _cmd_starter(a: argparse.Namespace) -> int:
 def _cmd_demo(a: argparse.Namespace) -> int:
     from .demo import run_demo
     window = True if a.window else (False if a.no_window else None)
-    paths = run_demo(stage=a.stage, impl=a.impl, output=a.output, window=window, frames=a.frames)
+    from .copy import default_impl
+    paths = run_demo(stage=a.stage, impl=a.impl or default_impl(), output=a.output, window=window, frames=a.frames)
     for p in paths:
         print(f"wrote {p}")
     if paths:
@@ -135,39 +141,46 @@ def _cmd_release(a: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The commands of this copy: a student's copy (``cs451 release``) has only the student's."""
+    from .copy import student_stage
     from .stages import stage_names
-    p = argparse.ArgumentParser(prog="cs451", description="cs451-kit: render, grade, and build the course's stages.")
+    mine = student_stage()
+    stages = [mine] if mine else stage_names()
+    what = f"stage {mine}" if mine else "the course's stages"
+    p = argparse.ArgumentParser(prog="cs451", description=f"cs451-kit: render and grade {what}.")
+    p.add_argument("--version", action="version", version=f"cs451-kit {__version__}")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    yours = "your package (this repository's)" if mine else "reference"
 
     r = sub.add_parser("render", help="render a scene to a PNG", description="Render a scene with an implementation of a stage.")
     r.add_argument("scene", help="a bundled scene name (see `cs451 scenes`) or a path to a scene JSON file")
     r.add_argument("-o", "--output", required=True, help="PNG file to write")
-    r.add_argument("--impl", default="reference", help="reference, starter, or the path of your submission folder (default: reference)")
+    r.add_argument("--impl", help=f"{'.' if mine else 'reference, starter'}, or the path of a folder holding the "
+                                  f"stage's package (default: {yours})")
     r.add_argument("--size", help="WIDTHxHEIGHT, overriding the scene's image size")
-    r.add_argument("--stage", choices=stage_names(), help="which stage renders the scene (default: from the scene's options)")
+    r.add_argument("--stage", choices=stages, help=f"which stage renders the scene (default: "
+                                                   f"{mine or 'from the scene options'})")
     r.add_argument("--shading", choices=["gouraud", "phong"], help="stage 1 only: override the scene's shading")
     r.set_defaults(func=_cmd_render)
 
     g = sub.add_parser("grade", help="grade a submission and write a report", description="Run a stage's autograder tests on a submission.")
-    g.add_argument("stage", choices=stage_names())
-    g.add_argument("--submission", default="starter", help="reference, starter, or a folder holding your stage package (default: starter)")
-    g.add_argument("--roster", help="grade every submission folder inside this folder (one per student)")
+    g.add_argument("stage", choices=stages)
+    g.add_argument("--submission", help=f"{'' if mine else 'reference, starter, or '}a folder holding the stage's "
+                                        f"package (default: {'your package' if mine else 'starter'})")
     g.add_argument("--results", help="write Gradescope's results.json here")
-    g.add_argument("--report", help="write an HTML report (reference, yours, difference, error map) into this folder; "
-                   "with --roster, the folder for the gradebook and reports (default: grades)")
-    g.add_argument("--public-only", action="store_true", help="run only the public tests, as a student's copy does")
+    g.add_argument("--report", help="write an HTML report (reference, yours, difference, error map) into this folder"
+                                    + ("" if mine else "; with --roster, the folder for the gradebook and reports (default: grades)"))
+    g.add_argument("--public-only", action="store_true", help="run only the public tests" + (" (a student copy has no others)" if mine else ", as a student's copy does"))
     g.add_argument("--student-view", action="store_true", help="report: count hidden tests without showing them")
     g.add_argument("--jobs", type=int, default=None, help="tests run at once (default: 2)")
     g.add_argument("--tasks", help="only these tasks' tests, e.g. S1,S2")
-    g.set_defaults(func=_cmd_grade)
-
-    s = sub.add_parser("starter", help="regenerate starter/ from reference/", description="Regenerate starter/ from the solution regions of reference/.")
-    s.add_argument("--check", action="store_true", help="only check: exit 1 if starter/ has drifted")
-    s.set_defaults(func=_cmd_starter)
+    if not mine:
+        g.add_argument("--roster", help="grade every submission folder inside this folder (one per student)")
+    g.set_defaults(func=_cmd_grade, roster=None)
 
     d = sub.add_parser("demo", help="the lecture demo: a window, or images without a display", description="Run a stage's demo.")
-    d.add_argument("stage", choices=stage_names())
-    d.add_argument("--impl", default="reference", help="reference, starter, or a submission folder")
+    d.add_argument("stage", choices=stages)
+    d.add_argument("--impl", help=f"a folder holding the stage's package (default: {yours})")
     d.add_argument("-o", "--output", default="demo", help="folder for the images when there is no display (default: demo)")
     d.add_argument("--window", action="store_true", help="open a window even if no display is detected")
     d.add_argument("--no-window", action="store_true", help="write images even if there is a display")
@@ -177,39 +190,47 @@ def build_parser() -> argparse.ArgumentParser:
     sc = sub.add_parser("scenes", help="list the bundled scenes", description="List the bundled scenes.")
     sc.set_defaults(func=_cmd_scenes)
 
-    ag = sub.add_parser("autograder", help="build or run the Gradescope autograder",
-                        description="Gradescope: `build` writes the autograder zip; inside it, `warm` (setup.sh) "
-                                    "computes the reference answers once and `run` (run_autograder) grades one "
-                                    "submission; `passed` reads a results.json (GitHub Classroom).")
+    ag = sub.add_parser("autograder", help="the autograder's own steps" if mine else "build or run the Gradescope autograder",
+                        description="`passed` reads a results.json (GitHub Classroom)." if mine else
+                        "Gradescope: `build` writes the autograder zip; inside it, `warm` (setup.sh) computes every "
+                        "answer once and `run` (run_autograder) grades one submission; `passed` reads a results.json "
+                        "(GitHub Classroom).")
     agsub = ag.add_subparsers(dest="action", required=True, metavar="ACTION")
-    agb = agsub.add_parser("build", help="write the Gradescope autograder zip for a stage")
-    agb.add_argument("stage", choices=stage_names())
-    agb.add_argument("-o", "--output", default="autograder.zip", help="zip file to write (default: autograder.zip)")
-    agw = agsub.add_parser("warm", help="compute the reference's answers to every test (setup.sh does this)")
-    agw.add_argument("stage", choices=stage_names())
-    agr = agsub.add_parser("run", help="grade one submission the Gradescope way (run_autograder does this)")
-    agr.add_argument("stage", choices=stage_names())
-    agr.add_argument("--submission", default="/autograder/submission")
-    agr.add_argument("--results", default="/autograder/results/results.json")
-    agr.add_argument("--tasks", help="only these tasks' tests (for testing the autograder)")
     agp = agsub.add_parser("passed", help="exit 0 when every test of TASK passed in RESULTS")
     agp.add_argument("results", help="a results.json written by `cs451 grade --results`")
     agp.add_argument("task", help="a task ID, e.g. S1")
     agp.set_defaults(func=_cmd_passed)
+    if mine:
+        return p
+
+    agb = agsub.add_parser("build", help="write the Gradescope autograder zip for a stage")
+    agb.add_argument("stage", choices=stages)
+    agb.add_argument("-o", "--output", default="autograder.zip", help="zip file to write (default: autograder.zip)")
+    agw = agsub.add_parser("warm", help="compute every answer the tests compare with (setup.sh does this)")
+    agw.add_argument("stage", choices=stages)
+    agr = agsub.add_parser("run", help="grade one submission the Gradescope way (run_autograder does this)")
+    agr.add_argument("stage", choices=stages)
+    agr.add_argument("--submission", default="/autograder/submission")
+    agr.add_argument("--results", default="/autograder/results/results.json")
+    agr.add_argument("--tasks", help="only these tasks' tests (for testing the autograder)")
     for p_ in (agb, agw, agr):
         p_.set_defaults(func=_cmd_autograder)
+
+    s = sub.add_parser("starter", help="regenerate starter/ from reference/", description="Regenerate starter/ from the solution regions of reference/.")
+    s.add_argument("--check", action="store_true", help="only check: exit 1 if starter/ has drifted")
+    s.set_defaults(func=_cmd_starter)
 
     rl = sub.add_parser("release", help="build the students' starter repository (GitHub Classroom template)",
                         description="Write a repository for students: the starter, the handout, the public tests "
                                     "with the reference's answers, and a workflow that runs them on push.")
-    rl.add_argument("stage", choices=stage_names())
+    rl.add_argument("stage", choices=stages)
     rl.add_argument("-o", "--output", required=True, help="a new folder to write the repository into")
     rl.add_argument("--include-reference", action="append", metavar="STAGE",
                     help="also ship this earlier stage's reference (one the stage builds on), after its deadline")
     rl.set_defaults(func=_cmd_release)
 
     b = sub.add_parser("bench", help="time-against-error benchmarks", description="Run a stage's benchmark; prints a table and writes JSON.")
-    b.add_argument("stage", choices=stage_names() + ["autograder", "tolerance"],
+    b.add_argument("stage", choices=stages + ["autograder", "tolerance"],
                    help="a stage; 'autograder' (grading time and memory per stage, against Gradescope's limits); "
                         "'tolerance' (image tests' spread across rasterisers and thread counts)")
     b.add_argument("-o", "--output", default="bench-results", help="folder for the JSON and plots (default: bench-results)")
@@ -228,6 +249,12 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("cs451: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # `cs451 scenes | head`: the reader left; say nothing more
+        try:
+            sys.stdout = open(os.devnull, "w")
+        except OSError:
+            pass
+        return 0
 
 
 if __name__ == "__main__":

@@ -35,8 +35,9 @@ def infer_stage(scene) -> str:
 def render_scene(*, scene: str, output: str | Path, impl: str = "reference", size: str | None = None,
                  stage: str | None = None, shading: str | None = None) -> tuple[Path, float]:
     """Render ``scene`` (a bundled name or a JSON path) and write ``output``; returns the path and seconds."""
+    from .copy import student_stage
     sc = load_scene(scene)
-    st = get_stage(stage or infer_stage(sc))
+    st = get_stage(stage or student_stage() or infer_stage(sc))
     module = load_impl(resolve_impl(impl, st.name), st.name)
     start = time.perf_counter()
     kwargs = {"shading": shading} if shading else {}

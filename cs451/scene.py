@@ -193,15 +193,21 @@ def bundled_scenes() -> list[str]:
 
 
 def resolve_scene_path(name_or_path: str | Path) -> Path:
-    """A bundled scene name (``sphere``) or a path to a JSON file."""
+    """A bundled scene name (``sphere``) or a path to a JSON file.
+
+    A bundled name wins over a folder of the same name (a student's repository holds a
+    package folder named after its stage, ``whitted/``, beside the bundled scene ``whitted``).
+    """
     p = Path(name_or_path)
-    if p.suffix == ".json" or p.exists():
-        if not p.exists():
-            raise KitError(f"{p}: scene file not found")
-        return p
     bundled = BUNDLED_DIR / f"{name_or_path}.json"
-    if bundled.exists():
+    if p.is_file():
+        return p
+    if p.suffix == ".json":
+        raise KitError(f"{p}: scene file not found")
+    if "/" not in str(name_or_path) and bundled.exists():
         return bundled
+    if p.is_dir():
+        raise KitError(f"{p}: a folder, not a scene file (bundled scenes: {', '.join(bundled_scenes())})")
     raise KitError(f"unknown scene {str(name_or_path)!r}: not a file, and not a bundled scene "
                    f"(bundled: {', '.join(bundled_scenes())})")
 

@@ -16,6 +16,7 @@ from pathlib import Path
 import pytest
 
 from cs451 import KIT_ROOT
+from cs451.packaging.handout import for_kit
 from cs451.cli import build_parser
 from cs451.grading.runner import load_tests
 from cs451.stages import get_stage, stage_names
@@ -43,7 +44,7 @@ class Handout:
 @functools.lru_cache(maxsize=None)
 def parse(path: Path) -> Handout:
     prose, blocks, fence, start, info, body = [], [], None, 0, "", []
-    for number, line in enumerate(path.read_text().splitlines(), 1):
+    for number, line in enumerate(for_kit(path.read_text()).splitlines(), 1):
         opening = re.match(r"^\s*(```+|~~~+)(.*)$", line)
         if fence is None and opening:
             fence, start, info, body = opening.group(1), number, opening.group(2).strip(), []

@@ -62,17 +62,24 @@ def array_close(key: str, truth_key: str = "value", rtol: float = 1e-6, atol: fl
     return check(close_to, key=key, truth_key=truth_key, rtol=rtol, atol=atol, what=what)
 
 
+def _shown(image: np.ndarray, params: dict) -> np.ndarray:
+    """An image as ``cs451 render`` writes it: the test scene's exposure and encoding (sRGB or linear)."""
+    settings = (params.get("scene") or {}).get("image", {}) if isinstance(params.get("scene"), dict) else {}
+    return to_uint8(image, float(settings.get("exposure", 1.0)), bool(settings.get("srgb", False)))
+
+
 def image_check(out: Outputs, expected: Outputs, params: dict, threshold: float, max_bad_fraction: float, shift: int,
                 key: str = "image") -> Verdict:
-    """The submission's image matches the reference render; the report gets all four pictures."""
+    """The submission's image matches the reference render (compared in linear values); the report gets all four
+    pictures, the two renders shown as ``cs451 render`` writes them."""
     tol = ImageTolerance(threshold, max_bad_fraction, shift)
     ref = np.asarray(expected[key], dtype=np.float64)
     try:
         got = output(out, key, ref.shape, "the image")
     except ShapeError as err:
-        return Verdict(0.0, str(err), {"reference": to_uint8(ref)})
+        return Verdict(0.0, str(err), {"reference": _shown(ref, params)})
     result = compare_images(ref, got, tol)
-    images = {"reference": to_uint8(ref), "submission": to_uint8(np.nan_to_num(got)),
+    images = {"reference": _shown(ref, params), "submission": _shown(np.nan_to_num(got), params),
               "difference": difference_image(ref, got), "error": error_heatmap(result.error_map, tol.threshold)}
     detail = {"bad_fraction": result.bad_fraction, "max_error": result.max_error, "mean_error": result.mean_error}
     msg = ("image matches: " if result.passed else "image differs: ") + result.message

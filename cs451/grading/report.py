@@ -23,8 +23,10 @@ table{border-collapse:collapse;margin:1em 0}td,th{padding:.3em .7em;border-botto
 figcaption{font-size:.85em;color:#555}section{margin:1.5em 0;padding-top:.5em;border-top:1px solid #eee}
 code{background:#f4f4f4;padding:0 .2em}
 """
-CAPTIONS = {"reference": "reference", "submission": "your render", "difference": "|difference| × 4",
-            "error": "error map (yellow: under the threshold, red: over)"}
+CAPTIONS = {"reference": "reference (as <code>cs451 render</code> writes it)",
+            "submission": "yours (as <code>cs451 render</code> writes it)",
+            "difference": "|difference| × 4, linear: black where they agree",
+            "error": "error map after the 3×3 allowance: black where equal, yellow up to the threshold, red over it"}
 
 
 def _png_data_uri(image: np.ndarray) -> str:
@@ -78,21 +80,32 @@ def render_report(result: GradeResult, show_hidden: bool = True) -> str:
                      f"<td>{r.score:g} / {r.test.points:g}</td><td class={cls}>{word}</td>"
                      f"<td>{esc(r.test.name)}{tag}</td><td class=muted>{esc(r.test.tolerance)}</td></tr>")
     parts.append("</table>")
-    for r in shown:
-        cls, word = _status(r)
-        parts.append(f"<section id='t{esc(r.test.number)}'><h3>{esc(r.test.number)} {esc(r.test.name)} "
-                     f"<span class={cls}>{word}</span></h3><p>{esc(r.verdict.message)}</p>")
-        if r.verdict.images:
-            parts.append("<div class=imgs>")
-            for key in ("reference", "submission", "difference", "error"):
-                if key in r.verdict.images:
-                    parts.append(f"<figure><img src='{_png_data_uri(r.verdict.images[key])}'>"
-                                 f"<figcaption>{CAPTIONS[key]}</figcaption></figure>")
-            parts.append("</div>")
-        if r.output.strip():
-            parts.append(f"<details><summary>your code printed</summary><pre>{esc(r.output)}</pre></details>")
-        parts.append("</section>")
+    failed = [r for r in shown if not r.verdict.passed]
+    passed = [r for r in shown if r.verdict.passed]
+    parts += [_section(r) for r in failed]           # failures first: what a student came to see
+    if passed:
+        parts.append(f"<details><summary>{len(passed)} passing test{'s' if len(passed) != 1 else ''}</summary>")
+        parts += [_section(r) for r in passed]
+        parts.append("</details>")
     return "\n".join(parts)
+
+
+def _section(r) -> str:
+    esc = html.escape
+    cls, word = _status(r)
+    parts = [f"<section id='t{esc(r.test.number)}'><h3>{esc(r.test.number)} {esc(r.test.name)} "
+             f"<span class={cls}>{word}</span></h3><p>{esc(r.verdict.message)}</p>"]
+    if r.verdict.images:
+        parts.append("<div class=imgs>")
+        for key in ("reference", "submission", "difference", "error"):
+            if key in r.verdict.images:
+                parts.append(f"<figure><img src='{_png_data_uri(r.verdict.images[key])}' alt='{key}'>"
+                             f"<figcaption>{CAPTIONS[key]}</figcaption></figure>")
+        parts.append("</div>")
+    if r.output.strip():
+        parts.append(f"<details><summary>your code printed</summary><pre>{esc(r.output)}</pre></details>")
+    parts.append("</section>")
+    return "".join(parts)
 
 
 def write_report(folder: str | Path, result: GradeResult, show_hidden: bool = True) -> Path:

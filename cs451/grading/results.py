@@ -74,7 +74,9 @@ def write_results(path: str | Path, result: GradeResult) -> Path:
 
 
 def format_table(result: GradeResult, width: int = 100) -> str:
-    """The per-test table printed by ``cs451 grade``."""
+    """The per-test table printed by ``cs451 grade``: every failure's message whole, wrapped under its test."""
+    import textwrap
+    indent = " " * 27
     lines = [f"{'test':<7} {'points':>11}  {'':4} name / message", "-" * width]
     for r in result.results:
         t = r.test
@@ -82,8 +84,8 @@ def format_table(result: GradeResult, width: int = 100) -> str:
         hidden = " [hidden]" if t.hidden else ""
         lines.append(f"{t.number:<7} {r.score:>5g} / {t.points:<3g}  {mark:4} {t.name}{hidden}")
         if not r.verdict.passed:
-            msg = r.verdict.message
-            lines.append(f"{'':27}{msg if len(msg) < width - 27 else msg[:width - 30] + '...'}")
+            lines += textwrap.wrap(r.verdict.message, width, initial_indent=indent, subsequent_indent=indent,
+                                   break_long_words=True, break_on_hyphens=False)
     lines.append("-" * width)
     by_task: dict[str, list[float]] = {}
     for r in result.results:

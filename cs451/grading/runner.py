@@ -214,7 +214,7 @@ def grade(stage: str, submission: str | Path, include_hidden: bool = True, show_
     if test_timeout is not None:
         tests = [replace(t, timeout=test_timeout) for t in tests]
     out = GradeResult(stage, str(submission))
-    if not include_hidden:
+    if not include_hidden or is_student_copy(stage):  # a student copy has no hidden tests to run: say so
         out.hidden_not_run = hidden_summary(stage)
     reference = ReferenceAnswers(stage)
     truths = TruthValues(stage)

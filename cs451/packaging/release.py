@@ -14,12 +14,14 @@ import json
 import shutil
 from pathlib import Path
 
-from .. import KIT_ROOT
+from .. import KIT_ROOT, __version__
+from ..copy import MARKER
 from ..errors import KitError
 from ..grading.loader import hidden_summary, load_tests, write_manifest
 from ..stages import get_stage
 from .answers import export_answers
 from .files import LITTER, copy_tree, write_executable
+from .handout import for_release
 
 #: What of ``autograder/<stage>/`` a student copy holds: the package marker and the checks (which only compare).
 SHIPPED_SPEC_FILES = ("__init__.py", "checks.py")
@@ -72,25 +74,44 @@ WORKFLOW_REPORTER = """      - name: Autograding Reporter
 
 README = """# {title}
 
-This is your repository for stage {number} of the course: the kit's engine, your package
-`{stage}/` (the starter: every function you write raises `NotImplementedError` with a hint),
-and the handout, [`{handout}`]({handout}). Read the handout first.
+Your repository for stage {number} of the course. It holds your package `{stage}/` (the starter:
+every function you write raises `NotImplementedError` with a hint until you write it), the kit's
+engine (`cs451/`), the public tests (`autograder/{stage}/`) and the handout,
+[`{handout}`]({handout}). Read the handout first: it says what each function must do and how
+it is graded.
 
 ## Set up (once)
-```
-./setup.sh                                  # Mesa's EGL driver and a Python virtual environment
-source .venv/bin/activate                   # then the `cs451` command is on your PATH
+
+On Debian or Ubuntu (or WSL on Windows), from this folder:
+
+```sh
+./setup.sh                    # Mesa's EGL driver (apt) and a Python environment in .venv
+source .venv/bin/activate     # puts `cs451` on your path
 ```
 
-## Work and check yourself
-```
-cs451 grade {stage} --submission . --public-only --report report    # the public tests; open report/report.html
-cs451 render {scene} --impl . -o mine.png                             # your render of a bundled scene
-```
-The public tests compare your answers with the reference's, shipped in
-`autograder/{stage}/answers/` (you cannot see the reference's code). {hidden}
+## Work, look, check
 
-Every push runs the public tests on GitHub (the Actions tab) and keeps the image report as an artifact.
+Edit the files in `{stage}/`; the handout names the function of every task. Then:
+
+```sh
+cs451 render {scene} -o mine.png
+cs451 grade {stage} --report report
+```
+
+The first writes your render of a bundled scene (`cs451 scenes` lists them). The second runs the
+public tests on your package and writes `report/report.html`: for each image test the reference,
+yours, their difference and an error map, failures first. The public tests compare your answers
+with the reference's, shipped as arrays in `autograder/{stage}/answers/` (the reference's code is
+not in this repository). {hidden}
+
+## Your GitHub repository
+
+Your instructor publishes this folder as the assignment's template on GitHub Classroom; accepting
+the assignment makes your own repository from it. Every push to it runs the public tests on GitHub
+(the Actions tab) and keeps the report as an artifact. Those points are your own check, not your
+grade: the grade comes from your instructor's grader, with the hidden tests. If you got this
+folder another way, make it a repository of your own with `git init`, `git add -A` and
+`git commit -m start`, then push it to a new repository on GitHub.
 """
 
 
@@ -145,8 +166,15 @@ def build_release(stage: str, output: str | Path, include_reference: tuple[str, 
     if not starter.is_dir():
         raise KitError(f"starter/{stage}: missing; run `cs451 starter` first")
     out.mkdir(parents=True, exist_ok=True)
-    for rel in ("cs451", "pyproject.toml", f"assignments/{st.handout}", "autograder/__init__.py"):
+    for rel in ("cs451", "pyproject.toml", "autograder/__init__.py"):
         copy_tree(rel, out)
+    handout = out / "assignments" / st.handout / "README.md"
+    handout.parent.mkdir(parents=True)
+    handout.write_text(for_release((KIT_ROOT / "assignments" / st.handout / "README.md").read_text(), stage,
+                                   f"assignments/{st.handout}/README.md"))
+    for extra in (KIT_ROOT / "assignments" / st.handout).iterdir():  # figures beside the handout
+        if extra.name != "README.md":
+            copy_tree(str(extra.relative_to(KIT_ROOT)), out)
     shutil.copytree(starter, out / stage, ignore=LITTER)
     for earlier in include_reference:
         copy_tree(f"reference/{earlier}", out)
@@ -163,10 +191,12 @@ def build_release(stage: str, output: str | Path, include_reference: tuple[str, 
     workflow = out / ".github" / "workflows" / "classroom.yml"
     workflow.parent.mkdir(parents=True)
     workflow.write_text(workflow_text(stage))
-    hidden_line = (f"After the deadline {hidden['count']} hidden tests ({hidden['points']:g} points) check the "
+    hidden_line = (f"After the deadline, {hidden['count']} hidden tests ({hidden['points']:g} points) check the "
                    "same tasks on scenes and parameters you have not seen." if hidden["count"] else "")
     scene = stage if (KIT_ROOT / "cs451" / "scenes" / f"{stage}.json").exists() else "cornell-box"
     (out / "README.md").write_text(README.format(title=st.title, number=st.number, stage=stage, scene=scene,
                                                  handout=f"assignments/{st.handout}/README.md", hidden=hidden_line))
+    (out / MARKER).write_text(json.dumps({"stage": stage, "kit_version": __version__,
+                                           "includes_reference": list(include_reference)}, indent=2) + "\n")
     (out / ".gitignore").write_text(".venv/\n__pycache__/\n*.egg-info/\n.cs451-cache/\nreport/\nresults.json\n*.png\n")
     return out
