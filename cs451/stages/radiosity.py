@@ -438,15 +438,21 @@ void main() { frag_color = vec4(v_color, 1.0); }
 """
 
 
-def camera_matrix(scene: Scene, width: int, height: int) -> np.ndarray:
-    """Projection · view of the scene camera (:mod:`cs451.viewing`: pyrender's projection, the stage-3 view)."""
+def camera_view(scene: Scene) -> np.ndarray:
+    """World to eye for the scene camera, from the stage-3 implementation's H2 (see :mod:`cs451.viewing`)."""
     from ..impl import earlier_stage_impl, load_impl
-    from ..viewing import camera_projection, camera_view
+    from ..viewing import camera_view as view_from
     from . import hemicube as H
 
     impl = load_impl(earlier_stage_impl("hemicube"), "hemicube")
-    view = camera_view(scene.camera, lambda c, n, u: H.call_views(impl, c, n, u))
-    return camera_projection(scene.camera, width, height) @ view
+    return view_from(scene.camera, lambda c, n, u: H.call_views(impl, c, n, u))
+
+
+def camera_matrix(scene: Scene, width: int, height: int, view: np.ndarray | None = None) -> np.ndarray:
+    """Projection · view of the scene camera: pyrender's projection, the view given or from :func:`camera_view`."""
+    from ..viewing import camera_projection
+
+    return camera_projection(scene.camera, width, height) @ (camera_view(scene) if view is None else view)
 
 
 class GouraudDrawer:
@@ -490,12 +496,12 @@ class GouraudDrawer:
 
 
 def draw_solution(scene: Scene, impl: Any, patches: Patches, display: np.ndarray, size: tuple[int, int] | None,
-                  exposure: float = 1.0, drawer: GouraudDrawer | None = None) -> np.ndarray:
+                  exposure: float = 1.0, drawer: GouraudDrawer | None = None, view: np.ndarray | None = None) -> np.ndarray:
     """The Gouraud-shaded image of per-patch radiosities (shown as radiance B/π), through the student's R5."""
     width, height = size or (scene.image.width, scene.image.height)
     positions, colors, corners = call_vertex_colors(impl, patches.quads, patches.parent, display)
     drawer = drawer or GouraudDrawer()
-    return drawer.draw(positions, colors * (exposure / math.pi), corners, camera_matrix(scene, width, height),
+    return drawer.draw(positions, colors * (exposure / math.pi), corners, camera_matrix(scene, width, height, view),
                        width, height, scene.image.background)
 
 
@@ -555,12 +561,12 @@ def probe_vertex_colors(impl: Any, quads: list, parent: list, radiosity: list) -
 
 
 def probe_system(impl: Any, scene: dict, patch_size: float = 0.0, resolution: int = 64, **_: Any) -> dict[str, np.ndarray]:
-    """Trusted inputs for the scene tests (run on the reference only): patches, colours and the full F."""
+    """Trusted inputs for the scene tests (run on the reference only): patches, colours, the full F and the camera view."""
     sc = parse_scene(scene, "<probe scene>")
     p = make_patches(sc, impl, patch_size)
     F = hemicube_formfactors(p.quads, resolution).matrix()
     return {"quads": p.quads, "parent": p.parent, "areas": p.areas, "reflectance": p.reflectance,
-            "emission": p.emission, "F": np.asarray(F, dtype=np.float64)}
+            "emission": p.emission, "F": np.asarray(F, dtype=np.float64), "view": camera_view(sc)}
 
 
 def probe_render(impl: Any, scene: dict, size: list[int], tolerance: float = 1e-3, use_ambient: bool = True,
@@ -572,7 +578,8 @@ def probe_render(impl: Any, scene: dict, size: list[int], tolerance: float = 1e-
     p = Patches(quads, parent, given["areas"], given["reflectance"], given["emission"], quads)
     sol = solve_progressive(impl, MatrixRows(given["F"]), p.areas, p.reflectance, p.emission, tolerance, max_shots,
                             1.0, use_ambient)
-    image = draw_solution(sc, impl, p, sol.display, (int(size[0]), int(size[1])), options(sc).exposure)
+    image = draw_solution(sc, impl, p, sol.display, (int(size[0]), int(size[1])), options(sc).exposure,
+                          view=given.get("view"))
     return {"image": np.clip(image * sc.image.exposure, 0.0, 1.0), "display": sol.display}
 
 
