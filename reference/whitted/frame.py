@@ -33,8 +33,13 @@ def frame_arrays(scene: TraceScene) -> tuple[np.ndarray, np.ndarray]:
     return mats, lights
 
 
-def trace_frame(scene: TraceScene, origins: np.ndarray, directions: np.ndarray, threads: int = 2) -> np.ndarray:
-    """``tracer.trace`` in one compiled kernel: the colour (n, 3) along each camera ray, counters updated."""
+def trace_frame(scene: TraceScene, origins: np.ndarray, directions: np.ndarray,
+                threads: int | None = None) -> np.ndarray:
+    """``tracer.trace`` in one compiled kernel: the colour (n, 3) along each camera ray, counters updated.
+
+    ``threads``: ``running.THREADS`` by default; the rays go in runs of 16 per thread, as the cost of a
+    pixel varies (a glass sphere's pixels spawn many rays).
+    """
     o = np.ascontiguousarray(origins, dtype=np.float64)
     d = np.ascontiguousarray(directions, dtype=np.float64)
     n = len(o)

@@ -274,9 +274,10 @@ def _layout(scene: TraceScene, tri: np.ndarray) -> dict:
     bvh = scene.bvh
     if bvh is None:
         ni = np.zeros((1, 32), np.int32)
-        tree = (ni.view(np.float32), ni, np.zeros(1, np.int64), tri, False)
+        nf, ni, order, ltri, use = ni.view(np.float32), ni, np.zeros(1, np.int64), tri, False
     else:
-        tree = four_wide(bvh, scene.n_spheres, tri)
+        nf, ni, order, ltri, use = four_wide(bvh, scene.n_spheres, tri)
+    tree = (nf.reshape(-1), ni.reshape(-1), order, ltri, use)   # the kernels index the rows' words flat
     sph = np.ascontiguousarray(np.column_stack([scene.sphere_center, scene.sphere_radius]).reshape(-1, 4))
     planes = np.ascontiguousarray(np.concatenate([scene.plane_point, scene.plane_normal], axis=1).reshape(-1, 6))
     frame = np.ascontiguousarray(np.concatenate([scene.plane_u, scene.plane_v], axis=1).reshape(-1, 6))

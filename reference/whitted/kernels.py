@@ -18,6 +18,7 @@ from numba import njit
 _JIT = dict(cache=True, nogil=True, error_model="numpy", _nrt=False)
 _INLINE = dict(_JIT, inline="always")  # helpers: inlined in numba's IR, no call
 STACK = 256
+_ROW = np.uint64(32)   # words per row of the four-wide hierarchy (see hierarchy.four_wide)
 
 
 def scratch(max_depth: int = 0) -> tuple[np.ndarray, ...]:
@@ -123,24 +124,24 @@ def _slabs(nf, q, c, ox, oy, oz, ix, iy, iz, tmax):
     """Entry distance into child c's box of row q (float32, rounded outwards), or inf."""
     t0 = 0.0
     t1 = tmax
-    ta = (np.float64(nf[q, c]) - ox) * ix
-    tb = (np.float64(nf[q, 12 + c]) - ox) * ix
+    ta = (np.float64(nf[q * _ROW + np.uint64(c)]) - ox) * ix
+    tb = (np.float64(nf[q * _ROW + np.uint64(12 + c)]) - ox) * ix
     if ta > tb:
         ta, tb = tb, ta
     if ta > t0:
         t0 = ta
     if tb < t1:
         t1 = tb
-    ta = (np.float64(nf[q, 4 + c]) - oy) * iy
-    tb = (np.float64(nf[q, 16 + c]) - oy) * iy
+    ta = (np.float64(nf[q * _ROW + np.uint64(4 + c)]) - oy) * iy
+    tb = (np.float64(nf[q * _ROW + np.uint64(16 + c)]) - oy) * iy
     if ta > tb:
         ta, tb = tb, ta
     if ta > t0:
         t0 = ta
     if tb < t1:
         t1 = tb
-    ta = (np.float64(nf[q, 8 + c]) - oz) * iz
-    tb = (np.float64(nf[q, 20 + c]) - oz) * iz
+    ta = (np.float64(nf[q * _ROW + np.uint64(8 + c)]) - oz) * iz
+    tb = (np.float64(nf[q * _ROW + np.uint64(20 + c)]) - oz) * iz
     if ta > tb:
         ta, tb = tb, ta
     if ta > t0:
@@ -154,9 +155,9 @@ def _slabs(nf, q, c, ox, oy, oz, ix, iy, iz, tmax):
 
 @njit(**_INLINE)
 def _axis(nf, q, col, o, inv, t0, t1):
-    """Clip (t0, t1) to one axis's slab of a child's box: near and far planes in nf[q, col], nf[q, col + 12]."""
-    ta = (np.float64(nf[q, col]) - o) * inv
-    tb = (np.float64(nf[q, col + 12]) - o) * inv
+    """Clip (t0, t1) to one axis's slab of a child's box: near and far planes in words col and col + 12 of row q."""
+    ta = (np.float64(nf[q * _ROW + np.uint64(col)]) - o) * inv
+    tb = (np.float64(nf[q * _ROW + np.uint64(col + 12)]) - o) * inv
     lo = tb if ta > tb else ta
     hi = ta if ta > tb else tb
     return (lo if lo > t0 else t0), (hi if hi < t1 else t1)
@@ -167,7 +168,7 @@ def _slabs4(nf, q, ox, oy, oz, ix, iy, iz, tmax, dist):
     """dist[c] = entry distance into child c's box of row q, or inf: ``_slabs`` for the four children.
 
     Written out lane by lane (straight-line, the same operations on columns c = 0..3) so that LLVM's
-    SLP vectoriser can test the four boxes at once (see ``_compiled``).
+    SLP vectoriser can test the four boxes at once (see ``running.compiled``).
     """
     n0, f0 = _axis(nf, q, 0, ox, ix, 0.0, tmax)
     n1, f1 = _axis(nf, q, 1, ox, ix, 0.0, tmax)
@@ -209,9 +210,11 @@ def _closest_one(ox, oy, oz, dx, dy, dz, nf, ni, order, ltri, use_bvh, nsph, sph
                  snear, dist):
     """The nearest hit of one ray: (t, primitive number, nodes visited, primitive tests); (inf, -1) on a miss.
 
-    The hierarchy is four-wide (see ``hierarchy.four_wide``): nf/ni are float32 and int32 views of the same
-    rows; row 0 holds the root alone; ``ltri`` holds the triangles slot by slot (ltri[j] is triangle
-    order[j] - nsph). The stack keeps each waiting child's row (or first slot), kind and entry distance.
+    The hierarchy is four-wide (see ``hierarchy.four_wide``): nf/ni are flat float32 and int32 views of
+    the same 32-word rows, indexed unsigned (no negative-index wraparound, no stride loads); row 0 holds
+    the root alone; ``ltri`` holds the triangles slot by slot (ltri[j] is triangle order[j] - nsph). The
+    stack keeps each waiting child's row (or first slot), kind and entry distance. A row whose ray enters
+    one or two children takes the nearer next without sorting; three or four are sorted.
     """
     ix, iy, iz, kx, ky, kz, sx, sy, sz, okx, oky, okz = _setup(ox, oy, oz, dx, dy, dz, use_bvh, tri.shape[0] > 0)
     nb = nsph + tri.shape[0]
@@ -242,10 +245,10 @@ def _closest_one(ox, oy, oz, dx, dy, dz, nf, ni, order, ltri, use_bvh, nsph, sph
         return best, prim, nodes, tests
     sp = 0
     nodes += 1
-    t = _slabs(nf, 0, 0, ox, oy, oz, ix, iy, iz, best)  # row 0 holds the root alone
+    t = _slabs(nf, np.uint64(0), 0, ox, oy, oz, ix, iy, iz, best)  # row 0 holds the root alone
     if t < math.inf:
-        stack[0] = ni[0, 24]
-        scnt[0] = ni[0, 28]
+        stack[0] = ni[24]
+        scnt[0] = ni[28]
         snear[0] = t
         sp = 1
     q = 0
@@ -254,10 +257,10 @@ def _closest_one(ox, oy, oz, dx, dy, dz, nf, ni, order, ltri, use_bvh, nsph, sph
     while go or sp > 0:
         if not go:
             sp -= 1
-            if snear[sp] > best:
+            if snear[np.uint64(sp)] > best:
                 continue
-            q = stack[sp]
-            cnt = scnt[sp]
+            q = stack[np.uint64(sp)]
+            cnt = scnt[np.uint64(sp)]
         go = False
         if cnt >= 0:  # a leaf
             for j in range(q, q + cnt):
@@ -270,31 +273,53 @@ def _closest_one(ox, oy, oz, dx, dy, dz, nf, ni, order, ltri, use_bvh, nsph, sph
             continue
         row = np.uint64(q)  # unsigned: no negative-index wraparound on the row's loads
         _slabs4(nf, row, ox, oy, oz, ix, iy, iz, best, dist)
-        # sort the four children by entry distance (then slot), without branches
+        nodes += (ni[row * _ROW + np.uint64(28)] != -2) + (ni[row * _ROW + np.uint64(29)] != -2) + (ni[row * _ROW + np.uint64(30)] != -2) + (ni[row * _ROW + np.uint64(31)] != -2)
         d0, d1, d2, d3 = dist[0], dist[1], dist[2], dist[3]
+        h0, h1, h2, h3 = d0 < math.inf, d1 < math.inf, d2 < math.inf, d3 < math.inf
+        entered = np.int64(h0) + np.int64(h1) + np.int64(h2) + np.int64(h3)
+        if entered == 0:
+            continue
+        if entered == 1:                         # the one child is next
+            c = 0 if h0 else (1 if h1 else (2 if h2 else 3))
+            q = ni[row * _ROW + np.uint64(24 + c)]
+            cnt = ni[row * _ROW + np.uint64(28 + c)]
+            go = True
+            continue
+        if entered == 2:                         # the nearer is next, the other waits (on a tie, the lower slot first)
+            a = 0 if h0 else (1 if h1 else 2)
+            b = 3 if h3 else (2 if h2 else 1)
+            near, far = (b, a) if dist[b] < dist[a] else (a, b)
+            stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(24 + far)]
+            scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(28 + far)]
+            snear[np.uint64(sp)] = dist[far]
+            sp += 1
+            q = ni[row * _ROW + np.uint64(24 + near)]
+            cnt = ni[row * _ROW + np.uint64(28 + near)]
+            go = True
+            continue
+        # three or four: sort them by entry distance (then slot)
         c0, c1, c2, c3 = 0, 1, 2, 3
         d0, c0, d1, c1 = _order(d0, c0, d1, c1)
         d2, c2, d3, c3 = _order(d2, c2, d3, c3)
         d0, c0, d2, c2 = _order(d0, c0, d2, c2)
         d1, c1, d3, c3 = _order(d1, c1, d3, c3)
         d1, c1, d2, c2 = _order(d1, c1, d2, c2)
-        nodes += (ni[row, 28] != -2) + (ni[row, 29] != -2) + (ni[row, 30] != -2) + (ni[row, 31] != -2)
         # the others wait on the stack, far to near; a missed child (inf) is overwritten
-        stack[sp] = ni[row, 24 + c3]
-        scnt[sp] = ni[row, 28 + c3]
-        snear[sp] = d3
+        stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(24 + c3)]
+        scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(28 + c3)]
+        snear[np.uint64(sp)] = d3
         sp += d3 < math.inf
-        stack[sp] = ni[row, 24 + c2]
-        scnt[sp] = ni[row, 28 + c2]
-        snear[sp] = d2
+        stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(24 + c2)]
+        scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(28 + c2)]
+        snear[np.uint64(sp)] = d2
         sp += d2 < math.inf
-        stack[sp] = ni[row, 24 + c1]
-        scnt[sp] = ni[row, 28 + c1]
-        snear[sp] = d1
+        stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(24 + c1)]
+        scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(28 + c1)]
+        snear[np.uint64(sp)] = d1
         sp += d1 < math.inf
         if d0 < math.inf:  # the nearest child is next
-            q = ni[row, 24 + c0]
-            cnt = ni[row, 28 + c0]
+            q = ni[row * _ROW + np.uint64(24 + c0)]
+            cnt = ni[row * _ROW + np.uint64(28 + c0)]
             go = True
     return best, prim, nodes, tests
 
@@ -363,7 +388,7 @@ def _attenuate(T0, T1, T2, k, t, ox, oy, oz, dx, dy, dz, nb, prim_mat, trans, pl
 
 @njit(**_INLINE)
 def _transmit_one(ox, oy, oz, dx, dy, dz, tmax, nf, ni, order, ltri, use_bvh, nsph, sph, tri, planes, pframe,
-                  checker, checker_mat, prim_mat, trans, stack, scnt):
+                  checker, checker_mat, prim_mat, trans, stack, scnt, dist):
     """One shadow ray: the product (T0, T1, T2) of the transmittances crossed on (0, tmax), zero once an
     opaque surface is crossed (any hit: the search stops there), and (nodes, tests)."""
     ix, iy, iz, kx, ky, kz, sx, sy, sz, okx, oky, okz = _setup(ox, oy, oz, dx, dy, dz, use_bvh, tri.shape[0] > 0)
@@ -396,18 +421,16 @@ def _transmit_one(ox, oy, oz, dx, dy, dz, tmax, nf, ni, order, ltri, use_bvh, ns
             if sp == 0:
                 break
             sp -= 1
-            q = stack[sp]
-            cnt = scnt[sp]
-            if cnt < 0:
+            q = stack[np.uint64(sp)]
+            cnt = scnt[np.uint64(sp)]
+            if cnt < 0:                    # a row: its children wait on the stack, the last slot on top
+                row = np.uint64(q)
+                _slabs4(nf, row, ox, oy, oz, ix, iy, iz, tmax, dist)
+                nodes += (ni[row * _ROW + np.uint64(28)] != -2) + (ni[row * _ROW + np.uint64(29)] != -2) + (ni[row * _ROW + np.uint64(30)] != -2) + (ni[row * _ROW + np.uint64(31)] != -2)
                 for c in range(4):
-                    kc = ni[q, 28 + c]
-                    if kc == -2:
-                        break
-                    nodes += 1
-                    if _slabs(nf, q, c, ox, oy, oz, ix, iy, iz, tmax) < math.inf:
-                        stack[sp] = ni[q, 24 + c]
-                        scnt[sp] = kc
-                        sp += 1
+                    stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(24 + c)]
+                    scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(28 + c)]
+                    sp += dist[c] < math.inf
                 continue
             first, last = q, q + cnt
         j = first
@@ -449,15 +472,17 @@ def transmission(O, D, TMAX, nf, ni, order, ltri, use_bvh, nsph, sph, tri, plane
     for i in range(O.shape[0]):
         out[i, 0], out[i, 1], out[i, 2], nodes, tests = _transmit_one(
             O[i, 0], O[i, 1], O[i, 2], D[i, 0], D[i, 1], D[i, 2], TMAX[i], nf, ni, order, ltri, use_bvh, nsph, sph,
-            tri, planes, pframe, checker, checker_mat, prim_mat, trans, stack, scnt)
+            tri, planes, pframe, checker, checker_mat, prim_mat, trans, stack, scnt, dist)
         stats[i, 0] = nodes
         stats[i, 1] = tests
 
 
 # --- a whole Whitted frame, one camera ray at a time -------------------------------------------------
-# The same steps as the numpy wavefront of tracer.trace (handout §W11), in the same floating-point
-# operations, so the two agree to rounding: only the order in which a pixel's contributions are summed
-# differs (depth first here, bounce by bounce there).
+# The same steps as the numpy wavefront of tracer.trace (handout §W11), in nearly the same floating-point
+# operations, so the two agree to rounding: a pixel's contributions are summed depth first here, bounce by
+# bounce there; unit vectors are scaled by one reciprocal instead of three divisions, and whole Phong
+# exponents are taken by repeated squaring (``_power``). Where a decision hangs on a sign (a light in
+# front of the surface, a side to spawn to) the two see the same (the tests compare the rays each casts).
 
 #: Columns of the material rows the frame kernel reads (``frame_arrays``).
 M_AMBIENT, M_DIFFUSE, M_SPECULAR, M_SHININESS, M_EMISSION = 0, 3, 6, 9, 10
@@ -474,6 +499,33 @@ def _spawn(px, py, pz, nx, ny, nz, dx, dy, dz, offset):
     s = 1.0 if side >= 0.0 else -1.0     # sign(0) counts as +1, as spawn does
     scale = (1.0 + max(abs(px), abs(py), abs(pz))) * offset
     return px + nx * (s * scale), py + ny * (s * scale), pz + nz * (s * scale)
+
+
+@njit(**_INLINE)
+def _push(rays, top, px, py, pz, nx, ny, nz, dx, dy, dz, w0, w1, w2, depth, offset):
+    """Put a secondary ray on the waiting stack: its direction normalised, its origin spawned off the surface."""
+    inv = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
+    dx, dy, dz = dx * inv, dy * inv, dz * inv
+    rays[top, 0], rays[top, 1], rays[top, 2] = _spawn(px, py, pz, nx, ny, nz, dx, dy, dz, offset)
+    rays[top, 3], rays[top, 4], rays[top, 5] = dx, dy, dz
+    rays[top, 6], rays[top, 7], rays[top, 8], rays[top, 9] = w0, w1, w2, depth
+    return top + 1
+
+
+@njit(**_INLINE)
+def _power(x, s):
+    """x ** s, by repeated squaring where s is a whole number below 2¹⁶ (as Phong exponents are): within a
+    few ulps of pow (so the frame agrees with the numpy path to rounding) and several times faster."""
+    if not (s == math.floor(s) and 0.0 <= s < 65536.0):
+        return x ** s
+    n = int(s)
+    r = 1.0
+    while n > 0:
+        if n & 1:
+            r *= x
+        x *= x
+        n >>= 1
+    return r
 
 
 @njit(**_INLINE)
@@ -541,8 +593,8 @@ def frame(O, D, nf, ni, order, ltri, use_bvh, nsph, sph, tri, planes, tri_normal
                 # TraceScene.light_toward
                 vx, vy, vz = lights[k, L_POS] - px, lights[k, L_POS + 1] - py, lights[k, L_POS + 2] - pz
                 r = math.sqrt(vx * vx + vy * vy + vz * vz)
-                safe = r if r > 0.0 else 1.0
-                lx, ly, lz = vx / safe, vy / safe, vz / safe
+                inv = 1.0 / (r if r > 0.0 else 1.0)
+                lx, ly, lz = vx * inv, vy * inv, vz * inv
                 att = 1.0 / (lights[k, L_ATT] + lights[k, L_ATT + 1] * r + lights[k, L_ATT + 2] * r * r)
                 if lights[k, L_AREA] > 0.0:
                     att = att * max(-(lx * lights[k, L_NORMAL] + ly * lights[k, L_NORMAL + 1]
@@ -559,10 +611,10 @@ def frame(O, D, nf, ni, order, ltri, use_bvh, nsph, sph, tri, planes, tri_normal
                 sx, sy, sz = _spawn(px, py, pz, nx, ny, nz, lx, ly, lz, offset)
                 wx, wy, wz = lights[k, L_POS] - sx, lights[k, L_POS + 1] - sy, lights[k, L_POS + 2] - sz
                 length = math.sqrt(wx * wx + wy * wy + wz * wz)
-                sl = length if length > 0.0 else 1.0
-                T0, T1, T2, nv, nt = _transmit_one(sx, sy, sz, wx / sl, wy / sl, wz / sl, length, nf, ni, order, ltri,
+                inv = 1.0 / (length if length > 0.0 else 1.0)
+                T0, T1, T2, nv, nt = _transmit_one(sx, sy, sz, wx * inv, wy * inv, wz * inv, length, nf, ni, order, ltri,
                                                    use_bvh, nsph, sph, tri, planes, pframe, checker, checker_mat,
-                                                   prim_mat, trans, stack, scnt)
+                                                   prim_mat, trans, stack, scnt, dist)
                 n_shadow += 1
                 nodes += nv
                 tests += nt
@@ -570,10 +622,10 @@ def frame(O, D, nf, ni, order, ltri, use_bvh, nsph, sph, tri, planes, tri_normal
                     continue                   # in shadow: the terms below would add exact zeros
                 # local shading (W6), Lambert plus Blinn-Phong toward the eye (-d)
                 hx, hy, hz = lx - dx, ly - dy, lz - dz
-                hn = max(math.sqrt(hx * hx + hy * hy + hz * hz), 1e-300)
-                hx, hy, hz = hx / hn, hy / hn, hz / hn
+                inv = 1.0 / max(math.sqrt(hx * hx + hy * hy + hz * hz), 1e-300)
+                hx, hy, hz = hx * inv, hy * inv, hz * inv
                 n_dot_h = max(nx * hx + ny * hy + nz * hz, 0.0)
-                spec = n_dot_h ** mats[m, M_SHININESS]
+                spec = _power(n_dot_h, mats[m, M_SHININESS])
                 lam = max(n_dot_l, 0.0)
                 l0 += kd0 * (ld0 * T0) * lam + ks0 * (ls0 * T0) * spec
                 l1 += kd1 * (ld1 * T1) * lam + ks1 * (ls1 * T1) * spec
@@ -603,22 +655,12 @@ def frame(O, D, nf, ni, order, ltri, use_bvh, nsph, sph, tri, planes, tri_normal
             wr0, wr1, wr2 = b0 * (kr0 + kt0 * f), b1 * (kr1 + kt1 * f), b2 * (kr2 + kt2 * f)
             wt0, wt1, wt2 = b0 * kt0 * (1.0 - f), b1 * kt1 * (1.0 - f), b2 * kt2 * (1.0 - f)
             if max(wt0, wt1, wt2) >= cut:     # the β cut-off
-                length = math.sqrt(tx * tx + ty * ty + tz * tz)
-                tx, ty, tz = tx / length, ty / length, tz / length
-                rays[top, 0], rays[top, 1], rays[top, 2] = _spawn(px, py, pz, nx, ny, nz, tx, ty, tz, offset)
-                rays[top, 3], rays[top, 4], rays[top, 5] = tx, ty, tz
-                rays[top, 6], rays[top, 7], rays[top, 8], rays[top, 9] = wt0, wt1, wt2, depth + 1
-                top += 1
+                top = _push(rays, top, px, py, pz, nx, ny, nz, tx, ty, tz, wt0, wt1, wt2, depth + 1, offset)
                 n_transmit += 1
             if max(wr0, wr1, wr2) >= cut:
                 g = 2.0 * (dx * nx + dy * ny + dz * nz)
-                rx, ry, rz = dx - g * nx, dy - g * ny, dz - g * nz
-                length = math.sqrt(rx * rx + ry * ry + rz * rz)
-                rx, ry, rz = rx / length, ry / length, rz / length
-                rays[top, 0], rays[top, 1], rays[top, 2] = _spawn(px, py, pz, nx, ny, nz, rx, ry, rz, offset)
-                rays[top, 3], rays[top, 4], rays[top, 5] = rx, ry, rz
-                rays[top, 6], rays[top, 7], rays[top, 8], rays[top, 9] = wr0, wr1, wr2, depth + 1
-                top += 1
+                top = _push(rays, top, px, py, pz, nx, ny, nz, dx - g * nx, dy - g * ny, dz - g * nz, wr0, wr1, wr2,
+                            depth + 1, offset)
                 n_reflect += 1
         out[i, 0], out[i, 1], out[i, 2] = c0, c1, c2
         counts[i, 0], counts[i, 1], counts[i, 2], counts[i, 3], counts[i, 4] = (n_shadow, n_reflect, n_transmit,

@@ -61,13 +61,18 @@ def compiled(kernel: Any, args: tuple) -> None:
         print(f"  {kernel.__name__}: {time.perf_counter() - start:.0f} s", file=sys.stderr, flush=True)
 
 
+#: Threads the kernels run in unless told otherwise (the bench sets 1 and 2 in turn).
+THREADS = 2
+
+
 def in_threads(kernel: Any, n: int, row_args: tuple, shared: tuple, outs: tuple, scratch: tuple,
-               threads: int = 2, chunks: int = 4) -> None:
+               threads: int | None = None, chunks: int = 4) -> None:
     """Run ``kernel(*rows, *shared, *outs, *scratch)`` over ``threads · chunks`` runs of the n rays, in threads.
 
     The kernels release the GIL. ``row_args`` and ``outs`` are split by rows; ``shared`` goes whole;
-    each run gets its own copy of the ``scratch`` arrays (working memory).
+    each run gets its own copy of the ``scratch`` arrays (working memory). ``threads``: THREADS by default.
     """
+    threads = THREADS if threads is None else threads
     compiled(kernel, (*row_args, *shared, *outs, *scratch))
     if n < 4096 or threads <= 1:
         kernel(*row_args, *shared, *outs, *scratch)
