@@ -15,6 +15,8 @@ from numba import njit
 
 from cs451.raytrace import TraceScene, content_key
 
+from .running import compiled
+
 _JIT = dict(cache=True, nogil=True, error_model="numpy")
 BINS = 16
 
@@ -172,7 +174,11 @@ def build(lo, hi, leaf_size):
 def built(lo: np.ndarray, hi: np.ndarray, leaf_size: int) -> dict[str, np.ndarray]:
     """The hierarchy over boxes (lo, hi), from the cache when the same boxes were seen before."""
     keys = ("lo", "hi", "child", "start", "count", "order")
-    bvh = HIERARCHIES.get(content_key(lo, hi, np.int64(leaf_size)), lambda: dict(zip(keys, build(lo, hi, leaf_size))))
+
+    def make() -> dict[str, np.ndarray]:
+        compiled(build, (lo, hi, leaf_size))   # the first compile says so
+        return dict(zip(keys, build(lo, hi, leaf_size)))
+    bvh = HIERARCHIES.get(content_key(lo, hi, np.int64(leaf_size)), make)
     return {k: v.copy() for k, v in bvh.items()}   # a copy: no caller can change the next one's
 
 
@@ -225,6 +231,7 @@ def _groups(child, area):
 
 @njit(**_JIT)
 def _fill(rows, row_of, lo32, hi32, child, start, count, nf, ni):
+    """Write each row's four child slots: boxes (float32, rounded outwards) and where each child is."""
     for q in range(rows.shape[0]):
         for c in range(4):
             k = rows[q, c]
@@ -254,6 +261,7 @@ def four_wide(bvh: dict, nsph: int, tri: np.ndarray) -> tuple:
     child = np.ascontiguousarray(bvh["child"], np.int64)
     ext = hi - lo
     area = ext[:, 0] * ext[:, 1] + ext[:, 1] * ext[:, 2] + ext[:, 2] * ext[:, 0]
+    compiled(_groups, (child, area))
     rows, row_of = _groups(child, area)
     raw = np.zeros(len(rows) * 32 + 16, np.int32)  # rows start on 64-byte cache lines
     skip = (-raw.ctypes.data % 64) // 4
@@ -261,8 +269,10 @@ def four_wide(bvh: dict, nsph: int, tri: np.ndarray) -> tuple:
     nf = ni.view(np.float32)
     ni[:, 28:32] = -2
     nf[:, :24] = np.inf          # an empty slot's box: no ray enters it
-    _fill(rows, row_of, lo32, hi32, child, np.ascontiguousarray(bvh["start"], np.int64),
-          np.ascontiguousarray(bvh["count"], np.int64), nf, ni)
+    fill = (rows, row_of, lo32, hi32, child, np.ascontiguousarray(bvh["start"], np.int64),
+            np.ascontiguousarray(bvh["count"], np.int64), nf, ni)
+    compiled(_fill, fill)
+    _fill(*fill)
     order = np.ascontiguousarray(bvh["order"], np.int64)
     ltri = np.zeros((len(order), 9))
     is_tri = order >= nsph

@@ -11,8 +11,9 @@ from typing import Any
 
 import numpy as np
 
-#: What compiling every kernel took on the kit's two-core test machine (numba 0.61, LLVM's SLP on).
-COMPILE_SECONDS = 60
+#: What compiling a render's kernels (the hierarchy build and the frame) took on the kit's two-core test
+#: machine, numba 0.68; the closest-hit and shadow kernels alone (tests, bench) take ~50 s more.
+COMPILE_SECONDS = 90
 _said = [False]
 
 
@@ -33,8 +34,8 @@ def _say_compiling() -> Any:
 def _say() -> None:
     if not _said[0]:
         _said[0] = True
-        print(f"compiling the ray tracer's kernels, once (~{COMPILE_SECONDS} s; later runs load them from "
-              f"numba's cache)", file=sys.stderr, flush=True)
+        print(f"compiling the ray tracer's kernels, once (~{COMPILE_SECONDS} s on two cores; later runs load them "
+              f"from numba's cache)", file=sys.stderr, flush=True)
 
 
 def compiled(kernel: Any, args: tuple) -> None:
