@@ -182,3 +182,14 @@ def test08_a_hierarchy_checked_before_is_judged_the_same_and_a_changed_one_again
     first = raytrace.bvh_problems(bad, lo, hi)
     assert first and raytrace.bvh_problems(bad, lo, hi) == first
     assert raytrace.bvh_problems({**good, "order": [[1, 2], [3]]}, lo, hi)   # unkeyable input is still judged
+
+
+def test09_compiled_camera_rays_are_numpys_bit_for_bit(ref):
+    for name in ("whitted", "cornell-box", "rippled-torus"):
+        camera = load_scene(name).camera
+        for size in ((97, 61), (1, 1), (320, 240)):
+            with path(ref, compiled=False):
+                a = ref.camera_rays(camera, *size)
+            with path(ref, compiled=True):
+                b = ref.camera_rays(camera, *size)
+            assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1]), (name, size)

@@ -477,6 +477,22 @@ def transmission(O, D, TMAX, nf, ni, order, ltri, use_bvh, nsph, sph, tri, plane
         stats[i, 1] = tests
 
 
+@njit(**_JIT)
+def camera(eye, forward, right, up, tan_x, tan_y, width, height, O, D):
+    """W1's camera rays, in the numpy version's operations and order (so bit for bit the same rays)."""
+    for j in range(height):
+        y = (1.0 - 2.0 * (j + 0.5) / height) * tan_y
+        for i in range(width):
+            x = (2.0 * (i + 0.5) / width - 1.0) * tan_x
+            k = j * width + i
+            dx = (forward[0] + x * right[0]) + y * up[0]
+            dy = (forward[1] + x * right[1]) + y * up[1]
+            dz = (forward[2] + x * right[2]) + y * up[2]
+            length = math.sqrt(dx * dx + dy * dy + dz * dz)
+            D[k, 0], D[k, 1], D[k, 2] = dx / length, dy / length, dz / length
+            O[k, 0], O[k, 1], O[k, 2] = eye[0], eye[1], eye[2]
+
+
 # --- a whole Whitted frame, one camera ray at a time -------------------------------------------------
 # The same steps as the numpy wavefront of tracer.trace (handout §W11), in nearly the same floating-point
 # operations, so the two agree to rounding: a pixel's contributions are summed depth first here, bounce by
