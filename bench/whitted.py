@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from cs451.impl import load_impl, resolve_impl
+from cs451.progress import Progress
 from cs451.raytrace import BVH_KEYS
 from cs451.scene import load_scene, parse_scene
 from cs451.stages import whitted as stage
@@ -58,7 +59,9 @@ def time_against_error(impl, quick: bool) -> list[dict]:
     rows = []
     top = (160, 120) if quick else (320, 240)
     sizes = [(top[0] // 4, top[1] // 4), (top[0] // 2, top[1] // 2), top]
+    bar = Progress("time against error", len(SCENES))
     for name in SCENES:
+        bar.advance(0, note=name)
         scene = load_scene(name)
         area = any(getattr(l, "type_name", "") == "area" for l in scene.lights)
         _render(impl, scene, (16, 12))  # compile and warm up
@@ -76,6 +79,8 @@ def time_against_error(impl, quick: bool) -> list[dict]:
             rows.append({"scene": name, "sweep": sweep, "value": value, "width": size[0], "height": size[1],
                          "seconds": seconds, "rms_error": float(err), "rays": rays, **counters,
                          "converged_seconds": conv_s})
+        bar.advance(note=name)
+    bar.close()
     return rows
 
 
@@ -156,7 +161,9 @@ def rays_per_second(impl, quick: bool) -> dict:
                  "build": hierarchy_build(impl, ts, embree_build_s, quick)}
     if escene is None:
         out["embree"] = "embreex is not installed (pip install -e '.[peers]'): Embree columns skipped"
+    bar = Progress("closest-hit queries against Embree", len(rays))
     for kind, (o, d) in rays.items():
+        bar.advance(0, note=kind)
         o = np.ascontiguousarray(o)
         d = np.ascontiguousarray(d)
         n = len(o)
@@ -194,6 +201,8 @@ def rays_per_second(impl, quick: bool) -> dict:
             row["ratio_2t"] = row["reference_2t_Mrays"] / row["embree_2t_full_Mrays"]
             row["ratio_1t"] = row["reference_1t_Mrays"] / row["embree_1t_full_Mrays"]
         out["kinds"][kind] = row
+        bar.advance(note=kind)
+    bar.close()
     return out
 
 

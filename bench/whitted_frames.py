@@ -20,6 +20,7 @@ from types import ModuleType
 
 import numpy as np
 
+from cs451.progress import Progress
 from cs451.scene import load_scene
 from cs451.stages import whitted as stage
 
@@ -79,7 +80,9 @@ def frames(impl: ModuleType, quick: bool, spp: int = 1) -> list[dict]:
     ref = reference_parts(impl)
     repeats = 3 if quick else 7
     rows = []
-    for name in ("whitted", "cornell-spheres", "rippled-torus"):
+    names = ("whitted", "cornell-spheres", "rippled-torus")
+    bar = Progress("whole frames", len(names) * repeats)
+    for name in names:
         scene = load_scene(name)
         _, counters = stage.render_traced(scene, impl, SIZE, spp=spp)   # warm up: compile, caches
         rays = sum(counters[k] for k in RAY_KINDS)
@@ -93,6 +96,7 @@ def frames(impl: ModuleType, quick: bool, spp: int = 1) -> list[dict]:
                         for label, fn in timers.items():
                             key = f"{label}_{n}t_s"
                             best[key] = min(best.get(key, math.inf), best_of(lambda: fn(n), 1))
+                bar.advance(note=name)
         assert own_rays == rays, f"{name}: the frame cast {rays} rays, the recording found {own_rays}"
         row = {"scene": name, "width": SIZE[0], "height": SIZE[1], "spp": spp, "rays": rays, "camera_rays": camera_rays,
                **counters, **best}
@@ -105,6 +109,7 @@ def frames(impl: ModuleType, quick: bool, spp: int = 1) -> list[dict]:
             if "mitsuba_1t_s" in best:
                 row[f"frame_over_mitsuba_time_{n}t"] = best[f"frame_{n}t_s"] / best[f"mitsuba_{n}t_s"]
         rows.append(row)
+    bar.close()
     return rows
 
 

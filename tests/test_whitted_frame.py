@@ -193,3 +193,48 @@ def test09_compiled_camera_rays_are_numpys_bit_for_bit(ref):
             with path(ref, compiled=True):
                 b = ref.camera_rays(camera, *size)
             assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1]), (name, size)
+
+
+def bench_module(name: str):
+    import sys
+    sys.path.insert(0, str(BUNDLED_DIR.parent.parent))
+    return importlib.import_module(f"bench.{name}")
+
+
+def test10_the_bench_records_every_ray_a_frame_casts(ref):
+    kernels = bench_module("whitted_kernels")
+    parts = kernels.reference_parts(ref)
+    for name in ("whitted", "rippled-torus"):
+        scene = load_scene(name)
+        ts = whitted.prepare(scene, ref)
+        o, d = ref.camera_rays(scene.camera, 40, 30)
+        with path(ref, compiled=True):
+            rays = kernels.frame_rays(parts, ts, o, d)
+        c = ts.counters
+        assert len(rays["closest"][0]) == c["camera"] + c["reflection"] + c["transmission"]
+        assert len(rays["shadow"][0]) == c["shadow"] > 0
+        assert np.allclose(np.linalg.norm(rays["shadow"][1], axis=1), 1.0)
+        assert part(ref, "bvh").FRAME_KERNEL                 # put back as it was
+
+
+def test11_mitsuba_is_handed_the_same_camera_and_geometry(ref, tmp_path):
+    """Where the kit's camera rays see nothing, Mitsuba's frame of the converted scene is black, and the
+    converted scene's lit pixels are where the kit's rays hit something."""
+    mi = pytest.importorskip("mitsuba")
+    convert = bench_module("whitted_mitsuba")
+    mi.set_variant(convert.VARIANT)
+    for name in ("rippled-torus", "cornell-spheres"):
+        scene = load_scene(name)
+        ts = raytrace.build(scene)
+        image = np.array(mi.render(mi.load_dict(convert.mitsuba_dict(scene, ts, (48, 36), 4, tmp_path)), spp=4))
+        o, d = ref.camera_rays(scene.camera, 48, 36)
+        with path(ref, compiled=False):
+            _, prim, _ = ref.closest_hit(whitted.prepare(scene, ref), o, d)
+        seen = (prim >= 0).reshape(36, 48)
+        near = np.zeros_like(seen)                         # Mitsuba's samples spread over the pixel: one pixel of slack
+        for dy in (-1, 0, 1):
+            for dx in (-1, 0, 1):
+                near |= np.roll(np.roll(seen, dy, 0), dx, 1)
+        lit = image[..., :3].max(axis=2) > 0
+        assert image.shape[:2] == (36, 48) and lit.mean() > 0.2
+        assert not (lit & ~near).any(), f"{name}: Mitsuba lights pixels where the kit sees background"
