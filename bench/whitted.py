@@ -1,4 +1,5 @@
-"""Stage 2 benchmark: run time against error, and closest-hit rays per second against Embree.
+"""Stage 2 benchmark: run time against error, closest-hit rays per second and hierarchy builds against
+Embree, and whole frames against their kernels and against Mitsuba 3.
 
 Part 1, for each bundled Whitted scene: frame time and error over image size, samples per
 pixel and the β cut-off, against a converged render of the same scene (16 samples per pixel,
@@ -10,12 +11,15 @@ Part 2: closest-hit queries on the 55,296-triangle rippled torus (the mesh alone
 reference's compiled kernels against Embree 4 through embreex, in the same run, on the same
 rays (primary rays and random rays from inside the torus's bounding box). Embree's ``run``
 is one thread; two threads each take half the rays. Skipped with a note when embreex is absent.
+The hierarchy: the reference's binned-SAH build and four-wide layout (warm, without the cache) against
+Embree's scene build, and what the cache hands back for the same boxes.
+
+Part 3 (``whitted_frames``): whole frames at 320×240 against the kernels their rays go through and
+against Mitsuba 3's frame of the same scene. A summary table prints every ratio measured in this run.
 """
 from __future__ import annotations
 
-import importlib
 import json
-import math
 import os
 import platform
 import time
@@ -25,8 +29,14 @@ from pathlib import Path
 import numpy as np
 
 from cs451.impl import load_impl, resolve_impl
+from cs451.progress import Progress
+from cs451.raytrace import BVH_KEYS
 from cs451.scene import load_scene, parse_scene
 from cs451.stages import whitted as stage
+
+from .whitted_frames import frames, print_frames
+from .whitted_kernels import best_of, closest_queries, reference_parts
+from .whitted_kernels import threads as threads_of
 
 SCENES = ("whitted", "cornell-spheres", "rippled-torus")
 CONVERGED = {"spp": 16, "min_weight": 1e-4, "max_depth": 12, "light_samples": 64}
@@ -49,7 +59,9 @@ def time_against_error(impl, quick: bool) -> list[dict]:
     rows = []
     top = (160, 120) if quick else (320, 240)
     sizes = [(top[0] // 4, top[1] // 4), (top[0] // 2, top[1] // 2), top]
+    bar = Progress("time against error", len(SCENES))
     for name in SCENES:
+        bar.advance(0, note=name)
         scene = load_scene(name)
         area = any(getattr(l, "type_name", "") == "area" for l in scene.lights)
         _render(impl, scene, (16, 12))  # compile and warm up
@@ -67,6 +79,8 @@ def time_against_error(impl, quick: bool) -> list[dict]:
             rows.append({"scene": name, "sweep": sweep, "value": value, "width": size[0], "height": size[1],
                          "seconds": seconds, "rms_error": float(err), "rays": rays, **counters,
                          "converged_seconds": conv_s})
+        bar.advance(note=name)
+    bar.close()
     return rows
 
 
@@ -91,57 +105,70 @@ def _query_rays(scene, n_side: int, seed: int = 7) -> dict[str, tuple[np.ndarray
     return {"primary": primary, "random": (o, d)}
 
 
-def _best_of(fn, repeats: int) -> float:
-    best = math.inf
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - start)
-    return best
-
-
-def rays_per_second(impl, quick: bool) -> dict:
-    scene = _torus_only()
-    kernels = importlib.import_module(impl.__name__ + ".kernels")
-    bvh_mod = importlib.import_module(impl.__name__ + ".bvh")
-    start = time.perf_counter()
-    ts = stage.prepare(scene, impl, hierarchy=True)
-    build_s = time.perf_counter() - start
-    rays = _query_rays(scene, 480 if quick else 960)
-    repeats = 2 if quick else 5
-    p = bvh_mod.packed(ts)
-    shared = (*p["tree"], p["nsph"], p["sph"], p["tri"], p["planes"], p["tri_normal"])
-    out: dict = {"triangles": int(ts.n_triangles), "bvh_nodes": int(len(ts.bvh["child"])), "bvh_build_s": build_s,
-                 "cpus": os.cpu_count(), "machine": platform.processor() or platform.machine(), "kinds": {}}
+def _embree(ts):
+    """An Embree scene of the triangles (None without embreex) and its build time (scene, geometry, commit)."""
     try:
         from embreex import rtcore_scene as rtcs
         from embreex.mesh_construction import TriangleMesh
-        tri = np.stack([ts.tri_v0, ts.tri_v1, ts.tri_v2], axis=1).astype(np.float32)
-        start = time.perf_counter()
+    except ImportError:
+        return None, None
+    tri = np.stack([ts.tri_v0, ts.tri_v1, ts.tri_v2], axis=1).astype(np.float32)
+
+    def make():
         escene = rtcs.EmbreeScene()
         TriangleMesh(escene, tri)
         escene.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32))  # commit (builds the BVH)
-        out["embree_build_s"] = time.perf_counter() - start
-    except ImportError:
-        escene = None
+        return escene
+    start = time.perf_counter()
+    escene = make()
+    return escene, min(time.perf_counter() - start, best_of(make, 2))
+
+
+def hierarchy_build(impl, ts, escene_build_s: float | None, quick: bool) -> dict:
+    """The reference's build (binned SAH, numba) and four-wide layout, warm and uncached, beside Embree's."""
+    ref = reference_parts(impl)
+    lo, hi = ts.bounds()
+    leaf = ref.bvh.LEAF_SIZE
+    tri = np.ascontiguousarray(np.concatenate([ts.tri_v0, ts.tri_v1, ts.tri_v2], axis=1))
+    start = time.perf_counter()
+    bvh = dict(zip(BVH_KEYS, ref.hierarchy.build(lo, hi, leaf)))
+    first = time.perf_counter() - start                    # includes loading (or compiling) the kernel
+    ref.hierarchy.four_wide(bvh, ts.n_spheres, tri)
+    repeats = 2 if quick else 5
+    build_s = best_of(lambda: ref.hierarchy.build(lo, hi, leaf), repeats)
+    layout_s = best_of(lambda: ref.hierarchy.four_wide(bvh, ts.n_spheres, tri), repeats)
+    ref.bvh.build_bvh(lo, hi)
+    cached_s = best_of(lambda: ref.bvh.build_bvh(lo, hi), repeats)
+    out = {"build_s": build_s, "layout_s": layout_s, "first_build_s": first, "cached_s": cached_s,
+           "nodes": int(len(bvh["child"])), "cache": ref.hierarchy.cache_counts()}
+    if escene_build_s is not None:
+        out["embree_build_s"] = escene_build_s
+        out["ratio"] = (build_s + layout_s) / escene_build_s
+    return out
+
+
+def rays_per_second(impl, quick: bool) -> dict:
+    """Closest-hit queries on the torus alone: the reference's kernel against Embree, same rays, same run."""
+    scene = _torus_only()
+    ref = reference_parts(impl)
+    ts = stage.prepare(scene, impl, hierarchy=True)
+    escene, embree_build_s = _embree(ts)
+    rays = _query_rays(scene, 480 if quick else 960)
+    repeats = 2 if quick else 5
+    closest = closest_queries(ref, ts)
+    out: dict = {"triangles": int(ts.n_triangles), "cpus": os.cpu_count(),
+                 "machine": platform.processor() or platform.machine(), "kinds": {},
+                 "build": hierarchy_build(impl, ts, embree_build_s, quick)}
+    if escene is None:
         out["embree"] = "embreex is not installed (pip install -e '.[peers]'): Embree columns skipped"
+    bar = Progress("closest-hit queries against Embree", len(rays))
     for kind, (o, d) in rays.items():
+        bar.advance(0, note=kind)
         o = np.ascontiguousarray(o)
         d = np.ascontiguousarray(d)
         n = len(o)
-        t = np.empty(n)
-        prim = np.empty(n, np.int64)
-        nrm = np.empty((n, 3))
-        stats = np.empty((n, 2), np.int64)
-        row: dict = {"rays": n}
-        for threads in (1, 2):
-            seconds = _best_of(lambda: kernels.in_threads(kernels.closest, n, (o, d), shared, (t, prim, nrm, stats),
-                                                          threads=threads), repeats)
-            row[f"reference_{threads}t_Mrays"] = n / seconds / 1e6
-        ts.reset_counters()
-        row["reference_W5_Mrays"] = n / _best_of(lambda: impl.closest_hit(ts, o, d), repeats) / 1e6
-        row["nodes_per_ray"] = float(stats[:, 0].mean())
-        row["tests_per_ray"] = float(stats[:, 1].mean())
+        t, prim, stats = closest(o, d)
+        row: dict = {"rays": n, "nodes_per_ray": float(stats[:, 0].mean()), "tests_per_ray": float(stats[:, 1].mean())}
         if escene is not None:
             o32, d32 = o.astype(np.float32), d.astype(np.float32)
             res = escene.run(o32, d32, output=1)
@@ -149,16 +176,33 @@ def rays_per_second(impl, quick: bool) -> dict:
             row["agree_prim"] = float(np.mean(np.where(ehit, res["primID"], -1) == np.where(prim >= 0, prim, -1)))
             both = ehit & (prim >= 0)
             row["agree_t_rel"] = float(np.median(np.abs(res["tfar"][both] - t[both]) / t[both])) if both.any() else 0.0
-            for label, output in (("full", 1), ("prim", None)):
-                row[f"embree_1t_{label}_Mrays"] = n / _best_of(lambda: escene.run(o32, d32, output=output), repeats) / 1e6
             half = n // 2
-            with ThreadPoolExecutor(2) as pool:
-                def two():
-                    list(pool.map(lambda s: escene.run(o32[s], d32[s], output=1), (slice(0, half), slice(half, n))))
-                row["embree_2t_full_Mrays"] = n / _best_of(two, repeats) / 1e6
+            pool = ThreadPoolExecutor(2)
+
+            def two():
+                list(pool.map(lambda s: escene.run(o32[s], d32[s], output=1), (slice(0, half), slice(half, n))))
+        best: dict[str, float] = {}
+        for _ in range(repeats):   # interleaved, so that the machine's load weighs on both alike
+            for threads in (1, 2):
+                with threads_of(ref, threads):
+                    seconds = best_of(lambda: closest(o, d), 1)
+                best[f"reference_{threads}t_Mrays"] = max(best.get(f"reference_{threads}t_Mrays", 0), n / seconds / 1e6)
+            ts.reset_counters()
+            seconds = best_of(lambda: impl.closest_hit(ts, o, d), 1)
+            best["reference_W5_Mrays"] = max(best.get("reference_W5_Mrays", 0), n / seconds / 1e6)
+            if escene is not None:
+                for label, output in (("full", 1), ("prim", None)):
+                    seconds = best_of(lambda: escene.run(o32, d32, output=output), 1)
+                    best[f"embree_1t_{label}_Mrays"] = max(best.get(f"embree_1t_{label}_Mrays", 0), n / seconds / 1e6)
+                best["embree_2t_full_Mrays"] = max(best.get("embree_2t_full_Mrays", 0), n / best_of(two, 1) / 1e6)
+        row.update(best)
+        if escene is not None:
+            pool.shutdown()
             row["ratio_2t"] = row["reference_2t_Mrays"] / row["embree_2t_full_Mrays"]
             row["ratio_1t"] = row["reference_1t_Mrays"] / row["embree_1t_full_Mrays"]
         out["kinds"][kind] = row
+        bar.advance(note=kind)
+    bar.close()
     return out
 
 
@@ -199,9 +243,45 @@ def _plot(rows: list[dict], speed: dict, path: Path) -> None:
     plt.close(fig)
 
 
+def summary(speed: dict, frame_rows: list[dict]) -> list[str]:
+    """The issue's table: each ratio measured side by side in this run (Markdown)."""
+    lines = ["| measure | kit | peer, same run | ratio |", "|---|---|---|---|"]
+    kinds, build = speed["kinds"], speed["build"]
+    for kind, label in (("primary", "primary rays"), ("random", "random rays from inside")):
+        r = kinds[kind]
+        peer = f"Embree {r['embree_1t_full_Mrays']:.2f}" if "embree_1t_full_Mrays" in r else "-"
+        ratio = f"{r['ratio_1t']:.2f}" if "ratio_1t" in r else "-"
+        lines.append(f"| closest-hit, {label}, {speed['triangles']:,}-triangle torus, 1 thread (M rays/s) | "
+                     f"{r['reference_1t_Mrays']:.2f} | {peer} | {ratio} |")
+    peer = f"Embree {build['embree_build_s']:.3f} s" if "embree_build_s" in build else "-"
+    ratio = f"{build['ratio']:.2f}×" if "ratio" in build else "-"
+    lines.append(f"| hierarchy build + four-wide layout, {speed['triangles']:,} triangles (again from the cache: "
+                 f"{build['cached_s'] * 1e3:.1f} ms) | {build['build_s'] + build['layout_s']:.3f} s | {peer} | {ratio} |")
+    names = " · ".join(r["scene"] for r in frame_rows)
+
+    def each(key: str, fmt: str = ".2f") -> str:
+        return " · ".join(format(r[key], fmt) for r in frame_rows)
+    for t in (1, 2):
+        on = f"{t} thread{'s' * (t > 1)}"
+        seconds = " · ".join(f"{r[f'frame_{t}t_Mrays']:.2f} ({r[f'frame_{t}t_s']:.3f})" for r in frame_rows)
+        lines.append(f"| whole frame 320×240, 1 spp, {on}: {names}; M rays/s (s), against the closest-hit kernel on "
+                     f"its camera rays | {seconds} | kernel {each(f'kernel_{t}t_Mrays')} | "
+                     f"{each(f'frame_over_kernel_{t}t')} |")
+        lines.append(f"| the same frames against the kernels on the frame's own rays (closest hit and shadow), {on} | "
+                     f"{each(f'frame_{t}t_Mrays')} | kernels {each(f'own_rays_{t}t_Mrays')} | "
+                     f"{each(f'frame_over_own_rays_{t}t')} |")
+        lines.append(f"| `render_traced` (with the scene to arrays), {on} (s) | {each(f'render_{t}t_s', '.3f')} | - | - |")
+        if f"mitsuba_{t}t_s" in frame_rows[0]:
+            lines.append(f"| the same frames beside Mitsuba 3 direct lighting, {on} (s) | {each(f'frame_{t}t_s', '.3f')} "
+                         f"| Mitsuba {each(f'mitsuba_{t}t_s', '.3f')} | kit/Mitsuba time "
+                         f"{each(f'frame_over_mitsuba_time_{t}t')} |")
+    return lines
+
+
 def main(output: Path, quick: bool = False) -> dict:
     impl = load_impl(resolve_impl("reference", "whitted"), "whitted")
     speed = rays_per_second(impl, quick)
+    frame_rows = frames(impl, quick)
     rows = time_against_error(impl, quick)
     print("stage 2 whitted: time against error (RMS, linear, clipped to [0, 1]) against a converged render "
           f"(spp {CONVERGED['spp']}, cut-off {CONVERGED['min_weight']:g}, depth {CONVERGED['max_depth']}, "
@@ -210,9 +290,11 @@ def main(output: Path, quick: bool = False) -> dict:
     for r in rows:
         print(f"{r['scene']:<16} {r['sweep']:<12} {r['value']:>8} {r['width']}×{r['height']:<4} {r['seconds']:>8.3f} "
               f"{r['rays']:>9} {r['rays'] / r['seconds'] / 1e6:>8.2f} {r['rms_error']:>10.5f}")
+    b = speed["build"]
     print(f"\nclosest-hit queries, {speed['triangles']:,} triangles (rippled torus alone), {speed['cpus']} CPUs; "
-          f"BVH build: reference {speed['bvh_build_s']:.2f} s ({speed['bvh_nodes']} nodes)"
-          + (f", Embree {speed['embree_build_s']:.2f} s" if "embree_build_s" in speed else ""))
+          f"hierarchy: build {b['build_s']:.3f} s + four-wide layout {b['layout_s']:.3f} s ({b['nodes']} nodes; "
+          f"first build in this process {b['first_build_s']:.2f} s, from the cache {b['cached_s'] * 1e3:.1f} ms)"
+          + (f", Embree {b['embree_build_s']:.3f} s" if "embree_build_s" in b else ""))
     if "embree" in speed:
         print(speed["embree"])
     cols = ["reference_1t_Mrays", "reference_2t_Mrays", "reference_W5_Mrays", "embree_1t_full_Mrays",
@@ -220,8 +302,12 @@ def main(output: Path, quick: bool = False) -> dict:
     print(f"{'rays':<8} {'n':>8} " + " ".join(f"{c.replace('_Mrays', ''):>14}" for c in cols))
     for kind, r in speed["kinds"].items():
         print(f"{kind:<8} {r['rays']:>8} " + " ".join(f"{r[c]:>14.3f}" if c in r else f"{'-':>14}" for c in cols))
+    print_frames(frame_rows)
+    table = summary(speed, frame_rows)
+    print("\nsummary (each ratio measured side by side in this run)\n" + "\n".join(table))
     output.mkdir(parents=True, exist_ok=True)
-    result = {"time_against_error": rows, "closest_hit": speed, "converged": CONVERGED}
+    result = {"time_against_error": rows, "closest_hit": speed, "frames": frame_rows, "converged": CONVERGED,
+              "summary": table}
     (output / "whitted.json").write_text(json.dumps(result, indent=2))
     _plot(rows, speed, output / "whitted.png")
     print(f"wrote {output / 'whitted.json'} and {output / 'whitted.png'}")

@@ -15,6 +15,7 @@ at a set of points).
 """
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -182,11 +183,27 @@ def _stratified(n: int, seed: int) -> np.ndarray:
     return np.stack([((i + jitter[0]) / cols).ravel(), ((j + jitter[1]) / rows).ravel()], axis=1)
 
 
+#: Meshes already read, by (path, modification time, size): a scene rendered again (a demo's frames, the
+#: bench's sweeps) does not parse its OBJ again. Callers get copies.
+_MESHES: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
+
+
 def load_mesh(path: Path, where: str) -> tuple[np.ndarray, np.ndarray]:
     """Vertices and triangles of an OBJ file, through trimesh; a KitError naming the scene field on failure."""
-    import trimesh
     if not path.is_file():
         raise KitError(f"{where}: mesh file {path} not found")
+    stat = path.stat()
+    key = (str(path.resolve()), stat.st_mtime_ns, stat.st_size)
+    if key not in _MESHES:
+        if len(_MESHES) >= 8:
+            _MESHES.clear()
+        _MESHES[key] = _read_mesh(path, where)
+    v, f = _MESHES[key]
+    return v.copy(), f.copy()
+
+
+def _read_mesh(path: Path, where: str) -> tuple[np.ndarray, np.ndarray]:
+    import trimesh
     try:
         mesh = trimesh.load(path, force="mesh", process=False)
     except Exception as err:  # trimesh raises many kinds on a malformed file
@@ -216,14 +233,14 @@ def build(scene: Any, max_depth: int = 5, min_weight: float = 0.01, light_sample
             sph_mat.append(m)
         elif isinstance(obj, Polygon):
             v = np.asarray(obj.vertices, np.float64)
-            for j in range(1, len(v) - 1):
-                tris.append(np.stack([v[0], v[j], v[j + 1]]))
-                tri_mat.append(m)
+            j = np.arange(1, len(v) - 1)
+            tris.append(np.stack([np.broadcast_to(v[0], (len(j), 3)), v[j], v[j + 1]], axis=1))  # a fan
+            tri_mat.extend([m] * len(j))
         elif isinstance(obj, Mesh):
             base = Path(scene.source).parent if scene.source else BUNDLED_DIR  # scenes given as dicts: the bundled folder
             v, f = load_mesh(base / obj.file, f"{label}: objects[{i}].file")
             v = v * obj.scale + np.asarray(obj.translate)
-            tris.extend(v[f])
+            tris.append(v[f])
             tri_mat.extend([m] * len(f))
         elif isinstance(obj, Plane):
             n = np.asarray(obj.normal, np.float64)
@@ -260,7 +277,7 @@ def build(scene: Any, max_depth: int = 5, min_weight: float = 0.01, light_sample
     def arr(rows, width=3):
         return np.asarray(rows, np.float64).reshape(-1, width)
 
-    tri = np.asarray(tris, np.float64).reshape(-1, 3, 3)
+    tri = np.concatenate(tris).astype(np.float64).reshape(-1, 3, 3) if tris else np.zeros((0, 3, 3))
     plane_cols = list(zip(*planes)) if planes else [[] for _ in range(7)]
     return TraceScene(
         sphere_center=arr(centers), sphere_radius=np.asarray(radii, np.float64),
@@ -286,6 +303,26 @@ def build(scene: Any, max_depth: int = 5, min_weight: float = 0.01, light_sample
 BVH_KEYS = ("lo", "hi", "child", "start", "count", "order")
 
 
+def content_key(*arrays: Any) -> str:
+    """A key for the contents of numeric arrays (values, dtypes, shapes): SHA-256, ~1 ms per MB.
+
+    Raises TypeError for arrays that are not plain numbers (objects, strings).
+    """
+    h = hashlib.sha256()
+    for a in arrays:
+        a = np.ascontiguousarray(a)
+        if a.dtype.kind not in "biuf":
+            raise TypeError(f"cannot key an array of {a.dtype}")
+        h.update(f"{a.dtype.str}{a.shape};".encode())
+        h.update(a.reshape(-1).view(np.uint8))
+    return h.hexdigest()
+
+
+#: Verdicts of ``bvh_problems`` by the contents of the hierarchy and the boxes: the same hierarchy handed
+#: in again (every render of a mesh scene) is not walked again.
+_CHECKED: dict[str, list[str]] = {}
+
+
 def bvh_problems(bvh: Any, lo: np.ndarray, hi: np.ndarray, max_leaf: int = 8) -> list[str]:
     """What is wrong with a hierarchy over boxes (lo, hi); empty when it is a valid one.
 
@@ -293,6 +330,18 @@ def bvh_problems(bvh: Any, lo: np.ndarray, hi: np.ndarray, max_leaf: int = 8) ->
     child + 1), -1 at a leaf; ``start``, ``count`` (m,) a leaf's range in ``order``; ``order`` (n,)
     the primitives, each once. Node 0 is the root.
     """
+    try:
+        key = content_key(*(np.asarray(bvh[k]) for k in BVH_KEYS), lo, hi, np.int64(max_leaf))
+    except (TypeError, ValueError, KeyError, IndexError):
+        return _bvh_problems(bvh, lo, hi, max_leaf)   # not a dict of numeric arrays: nothing to key on
+    if key not in _CHECKED:
+        if len(_CHECKED) >= 64:
+            _CHECKED.clear()
+        _CHECKED[key] = _bvh_problems(bvh, lo, hi, max_leaf)
+    return list(_CHECKED[key])
+
+
+def _bvh_problems(bvh: Any, lo: np.ndarray, hi: np.ndarray, max_leaf: int) -> list[str]:
     if not isinstance(bvh, dict) or any(k not in bvh for k in BVH_KEYS):
         return [f"must be a dict with keys {', '.join(BVH_KEYS)}"]
     try:

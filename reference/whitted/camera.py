@@ -22,10 +22,22 @@ def camera_rays(camera, width: int, height: int) -> tuple[np.ndarray, np.ndarray
     true_up = np.cross(right, forward)
     tan_y = np.tan(np.radians(camera.fovy) / 2.0)
     tan_x = tan_y * width / height
+    from .bvh import use_compiled
+    if use_compiled(width * height):   # a large image: the same arithmetic, compiled (kernels.camera)
+        from .kernels import camera
+        from .running import compiled
+        origins, directions = np.empty((width * height, 3)), np.empty((width * height, 3))
+        args = (eye, forward, right, true_up, float(tan_x), float(tan_y), int(width), int(height), origins, directions)
+        compiled(camera, args)
+        camera(*args)
+        return origins, directions
     x = (2.0 * (np.arange(width) + 0.5) / width - 1.0) * tan_x
     y = (1.0 - 2.0 * (np.arange(height) + 0.5) / height) * tan_y
-    xx, yy = np.meshgrid(x, y, indexing="xy")
-    directions = forward + xx.reshape(-1, 1) * right + yy.reshape(-1, 1) * true_up
-    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
-    return np.broadcast_to(eye, directions.shape).copy(), directions
+    across = forward + x[:, None] * right                  # (width, 3): each column's part, then each row's
+    directions = (across[None, :, :] + (y[:, None] * true_up)[:, None, :]).reshape(-1, 3)
+    sq = directions * directions
+    directions /= np.sqrt(sq[:, 0] + sq[:, 1] + sq[:, 2])[:, None]
+    origins = np.empty_like(directions)
+    origins[:] = eye
+    return origins, directions
     # END SOLUTION

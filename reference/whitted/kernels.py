@@ -1,21 +1,31 @@
-"""The reference's compiled inner loops (numba): hierarchy traversal, closest hit and shadow rays.
+"""The reference's compiled inner loops (numba): hierarchy traversal, closest hit, shadow rays, and a
+whole Whitted frame (closest hit, shading, shadow rays and the recursion for each camera ray).
 
-Written per ray, in float64, and run on chunks of rays in threads (``nogil``).
-A clear numpy solution does not need this file: it is how the reference reaches
-Embree-like speeds (see ``bench/whitted.py``). Students' copies of it are empty.
+Written per ray, in float64, and run on chunks of rays in threads (``nogil``, see ``running.py``).
+A clear numpy solution does not need this file: it is how the reference reaches Embree-like speeds
+(see ``bench/whitted.py``). The frame kernel lives here with the traversal it inlines because numba's
+cache checks only the file a kernel is defined in. Students' copies of it are empty.
 """
 # BEGIN SOLUTION
 from __future__ import annotations
 
 import math
-from concurrent.futures import ThreadPoolExecutor
-
 import numpy as np
 from numba import njit
 
-_JIT = dict(cache=True, nogil=True, error_model="numpy")
-_INLINE = dict(_JIT, inline="always")  # small helpers: no call, no reference counting of their array arguments
+#: The kernels allocate nothing (their stacks come in, see ``scratch``), so they are compiled without numba's
+#: reference counting: an inlined helper's array arguments would otherwise cost atomic increments per call.
+_JIT = dict(cache=True, nogil=True, error_model="numpy", _nrt=False)
+_INLINE = dict(_JIT, inline="always")  # helpers: inlined in numba's IR, no call
 STACK = 256
+_ROW = np.uint64(32)   # words per row of the four-wide hierarchy (see hierarchy.four_wide)
+
+
+def scratch(max_depth: int = 0) -> tuple[np.ndarray, ...]:
+    """One thread's working memory for any kernel here: the traversal stack (node, kind, entry distance),
+    four children's distances, and the frame's waiting rays (origin, direction, weight, depth)."""
+    return (np.empty(STACK, np.int64), np.empty(STACK, np.int64), np.empty(STACK), np.empty(4),
+            np.empty((2 * max_depth + 2, 10)))
 
 
 @njit(**_INLINE)
@@ -96,28 +106,42 @@ def _shear(ox, oy, oz, dx, dy, dz):
 
 
 @njit(**_INLINE)
+def _setup(ox, oy, oz, dx, dy, dz, boxes, triangles):
+    """What traversal needs of a ray, computed only where it is used: the inverse direction (for boxes) and
+    the watertight test's shear (for triangles)."""
+    ix, iy, iz = 0.0, 0.0, 0.0
+    if boxes:
+        ix, iy, iz = 1.0 / dx, 1.0 / dy, 1.0 / dz
+    if triangles:
+        kx, ky, kz, sx, sy, sz, okx, oky, okz = _shear(ox, oy, oz, dx, dy, dz)
+    else:
+        kx, ky, kz, sx, sy, sz, okx, oky, okz = 0, 1, 2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    return ix, iy, iz, kx, ky, kz, sx, sy, sz, okx, oky, okz
+
+
+@njit(**_INLINE)
 def _slabs(nf, q, c, ox, oy, oz, ix, iy, iz, tmax):
     """Entry distance into child c's box of row q (float32, rounded outwards), or inf."""
     t0 = 0.0
     t1 = tmax
-    ta = (np.float64(nf[q, c]) - ox) * ix
-    tb = (np.float64(nf[q, 12 + c]) - ox) * ix
+    ta = (np.float64(nf[q * _ROW + np.uint64(c)]) - ox) * ix
+    tb = (np.float64(nf[q * _ROW + np.uint64(12 + c)]) - ox) * ix
     if ta > tb:
         ta, tb = tb, ta
     if ta > t0:
         t0 = ta
     if tb < t1:
         t1 = tb
-    ta = (np.float64(nf[q, 4 + c]) - oy) * iy
-    tb = (np.float64(nf[q, 16 + c]) - oy) * iy
+    ta = (np.float64(nf[q * _ROW + np.uint64(4 + c)]) - oy) * iy
+    tb = (np.float64(nf[q * _ROW + np.uint64(16 + c)]) - oy) * iy
     if ta > tb:
         ta, tb = tb, ta
     if ta > t0:
         t0 = ta
     if tb < t1:
         t1 = tb
-    ta = (np.float64(nf[q, 8 + c]) - oz) * iz
-    tb = (np.float64(nf[q, 20 + c]) - oz) * iz
+    ta = (np.float64(nf[q * _ROW + np.uint64(8 + c)]) - oz) * iz
+    tb = (np.float64(nf[q * _ROW + np.uint64(20 + c)]) - oz) * iz
     if ta > tb:
         ta, tb = tb, ta
     if ta > t0:
@@ -131,9 +155,9 @@ def _slabs(nf, q, c, ox, oy, oz, ix, iy, iz, tmax):
 
 @njit(**_INLINE)
 def _axis(nf, q, col, o, inv, t0, t1):
-    """Clip (t0, t1) to one axis's slab of a child's box: near and far planes in nf[q, col], nf[q, col + 12]."""
-    ta = (np.float64(nf[q, col]) - o) * inv
-    tb = (np.float64(nf[q, col + 12]) - o) * inv
+    """Clip (t0, t1) to one axis's slab of a child's box: near and far planes in words col and col + 12 of row q."""
+    ta = (np.float64(nf[q * _ROW + np.uint64(col)]) - o) * inv
+    tb = (np.float64(nf[q * _ROW + np.uint64(col + 12)]) - o) * inv
     lo = tb if ta > tb else ta
     hi = ta if ta > tb else tb
     return (lo if lo > t0 else t0), (hi if hi < t1 else t1)
@@ -144,7 +168,7 @@ def _slabs4(nf, q, ox, oy, oz, ix, iy, iz, tmax, dist):
     """dist[c] = entry distance into child c's box of row q, or inf: ``_slabs`` for the four children.
 
     Written out lane by lane (straight-line, the same operations on columns c = 0..3) so that LLVM's
-    SLP vectoriser can test the four boxes at once (see ``_compiled``).
+    SLP vectoriser can test the four boxes at once (see ``running.compiled``).
     """
     n0, f0 = _axis(nf, q, 0, ox, ix, 0.0, tmax)
     n1, f1 = _axis(nf, q, 1, ox, ix, 0.0, tmax)
@@ -181,133 +205,170 @@ def _prim_t(ox, oy, oz, dx, dy, dz, okx, oky, okz, kx, ky, kz, sx, sy, sz, k, j,
     return _triangle(okx, oky, okz, kx, ky, kz, sx, sy, sz, ltri, j, tmax)
 
 
+@njit(**_INLINE)
+def _closest_one(ox, oy, oz, dx, dy, dz, nf, ni, order, ltri, use_bvh, nsph, sph, tri, planes, stack, scnt,
+                 snear, dist):
+    """The nearest hit of one ray: (t, primitive number, nodes visited, primitive tests); (inf, -1) on a miss.
+
+    The hierarchy is four-wide (see ``hierarchy.four_wide``): nf/ni are flat float32 and int32 views of
+    the same 32-word rows, indexed unsigned (no negative-index wraparound, no stride loads); row 0 holds
+    the root alone; ``ltri`` holds the triangles slot by slot (ltri[j] is triangle order[j] - nsph). The
+    stack keeps each waiting child's row (or first slot), kind and entry distance. A row whose ray enters
+    one or two children takes the nearer next without sorting; three or four are sorted.
+    """
+    ix, iy, iz, kx, ky, kz, sx, sy, sz, okx, oky, okz = _setup(ox, oy, oz, dx, dy, dz, use_bvh, tri.shape[0] > 0)
+    nb = nsph + tri.shape[0]
+    best = math.inf
+    prim = -1
+    nodes = 0
+    tests = 0
+    for p in range(planes.shape[0]):
+        dn = dx * planes[p, 3] + dy * planes[p, 4] + dz * planes[p, 5]
+        tests += 1
+        if dn != 0.0:
+            t = ((planes[p, 0] - ox) * planes[p, 3] + (planes[p, 1] - oy) * planes[p, 4]
+                 + (planes[p, 2] - oz) * planes[p, 5]) / dn
+            if 0.0 < t < best:
+                best = t
+                prim = nb + p
+    if not use_bvh:
+        for k in range(nb):
+            tests += 1
+            if k < nsph:
+                t0, t1 = _sphere_roots(ox, oy, oz, dx, dy, dz, sph, k)
+                t = t0 if t0 > 0.0 else t1
+            else:
+                t = _triangle(okx, oky, okz, kx, ky, kz, sx, sy, sz, tri, k - nsph, best)
+            if 0.0 < t < best:
+                best = t
+                prim = k
+        return best, prim, nodes, tests
+    sp = 0
+    nodes += 1
+    t = _slabs(nf, np.uint64(0), 0, ox, oy, oz, ix, iy, iz, best)  # row 0 holds the root alone
+    if t < math.inf:
+        stack[0] = ni[24]
+        scnt[0] = ni[28]
+        snear[0] = t
+        sp = 1
+    q = 0
+    cnt = 0
+    go = False  # True: (q, cnt) is the next node, taken without a trip through the stack
+    while go or sp > 0:
+        if not go:
+            sp -= 1
+            if snear[np.uint64(sp)] > best:
+                continue
+            q = stack[np.uint64(sp)]
+            cnt = scnt[np.uint64(sp)]
+        go = False
+        if cnt >= 0:  # a leaf
+            for j in range(q, q + cnt):
+                k = order[j]
+                tests += 1
+                t = _prim_t(ox, oy, oz, dx, dy, dz, okx, oky, okz, kx, ky, kz, sx, sy, sz, k, j, nsph, sph, ltri, best)
+                if 0.0 < t < best:
+                    best = t
+                    prim = k
+            continue
+        row = np.uint64(q)  # unsigned: no negative-index wraparound on the row's loads
+        _slabs4(nf, row, ox, oy, oz, ix, iy, iz, best, dist)
+        nodes += (ni[row * _ROW + np.uint64(28)] != -2) + (ni[row * _ROW + np.uint64(29)] != -2) + (ni[row * _ROW + np.uint64(30)] != -2) + (ni[row * _ROW + np.uint64(31)] != -2)
+        d0, d1, d2, d3 = dist[0], dist[1], dist[2], dist[3]
+        h0, h1, h2, h3 = d0 < math.inf, d1 < math.inf, d2 < math.inf, d3 < math.inf
+        entered = np.int64(h0) + np.int64(h1) + np.int64(h2) + np.int64(h3)
+        if entered == 0:
+            continue
+        if entered == 1:                         # the one child is next
+            c = 0 if h0 else (1 if h1 else (2 if h2 else 3))
+            q = ni[row * _ROW + np.uint64(24 + c)]
+            cnt = ni[row * _ROW + np.uint64(28 + c)]
+            go = True
+            continue
+        if entered == 2:                         # the nearer is next, the other waits (on a tie, the lower slot first)
+            a = 0 if h0 else (1 if h1 else 2)
+            b = 3 if h3 else (2 if h2 else 1)
+            near, far = (b, a) if dist[b] < dist[a] else (a, b)
+            stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(24 + far)]
+            scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(28 + far)]
+            snear[np.uint64(sp)] = dist[far]
+            sp += 1
+            q = ni[row * _ROW + np.uint64(24 + near)]
+            cnt = ni[row * _ROW + np.uint64(28 + near)]
+            go = True
+            continue
+        # three or four: sort them by entry distance (then slot)
+        c0, c1, c2, c3 = 0, 1, 2, 3
+        d0, c0, d1, c1 = _order(d0, c0, d1, c1)
+        d2, c2, d3, c3 = _order(d2, c2, d3, c3)
+        d0, c0, d2, c2 = _order(d0, c0, d2, c2)
+        d1, c1, d3, c3 = _order(d1, c1, d3, c3)
+        d1, c1, d2, c2 = _order(d1, c1, d2, c2)
+        # the others wait on the stack, far to near; a missed child (inf) is overwritten
+        stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(24 + c3)]
+        scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(28 + c3)]
+        snear[np.uint64(sp)] = d3
+        sp += d3 < math.inf
+        stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(24 + c2)]
+        scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(28 + c2)]
+        snear[np.uint64(sp)] = d2
+        sp += d2 < math.inf
+        stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(24 + c1)]
+        scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(28 + c1)]
+        snear[np.uint64(sp)] = d1
+        sp += d1 < math.inf
+        if d0 < math.inf:  # the nearest child is next
+            q = ni[row * _ROW + np.uint64(24 + c0)]
+            cnt = ni[row * _ROW + np.uint64(28 + c0)]
+            go = True
+    return best, prim, nodes, tests
+
+
+@njit(**_INLINE)
+def _normal(prim, t, ox, oy, oz, dx, dy, dz, nsph, nb, sph, planes, tri_normal):
+    """The unit geometric normal at the hit t of primitive prim (zero on a miss)."""
+    if prim < 0:
+        return 0.0, 0.0, 0.0
+    if prim < nsph:
+        r = sph[prim, 3]
+        nx = (ox + t * dx - sph[prim, 0]) / r
+        ny = (oy + t * dy - sph[prim, 1]) / r
+        nz = (oz + t * dz - sph[prim, 2]) / r
+        length = math.sqrt(nx ** 2 + ny ** 2 + nz ** 2)
+        return nx / length, ny / length, nz / length
+    if prim < nb:
+        return tri_normal[prim - nsph, 0], tri_normal[prim - nsph, 1], tri_normal[prim - nsph, 2]
+    return planes[prim - nb, 3], planes[prim - nb, 4], planes[prim - nb, 5]
+
+
 @njit(**_JIT)
 def closest(O, D, nf, ni, order, ltri, use_bvh, nsph, sph, tri, planes, tri_normal, out_t, out_prim,
-            out_n, stats):
+            out_n, stats, stack, scnt, snear, dist, rays):
     """Closest hit of each ray: t (inf on a miss), primitive number (-1), unit normal; stats[i] = (nodes, tests).
 
-    The hierarchy is four-wide (see ``bvh._tree``): nf/ni are float32 and int32 views of the same rows;
-    row 0 holds the root alone; ``ltri`` holds the triangles slot by slot (ltri[j] is triangle
-    order[j] - nsph). The stack keeps each waiting child's row (or first slot), kind and entry distance.
+    The last five arguments are one thread's ``scratch()``.
     """
-    stack = np.empty(STACK, np.int64)
-    scnt = np.empty(STACK, np.int64)
-    snear = np.empty(STACK, np.float64)
-    dist = np.empty(4)
     nb = nsph + tri.shape[0]
     for i in range(O.shape[0]):
         ox, oy, oz = O[i, 0], O[i, 1], O[i, 2]
         dx, dy, dz = D[i, 0], D[i, 1], D[i, 2]
-        ix, iy, iz = 1.0 / dx, 1.0 / dy, 1.0 / dz
-        kx, ky, kz, sx, sy, sz, okx, oky, okz = _shear(ox, oy, oz, dx, dy, dz)
-        best = math.inf
-        prim = -1
-        nodes = 0
-        tests = 0
-        for p in range(planes.shape[0]):
-            dn = dx * planes[p, 3] + dy * planes[p, 4] + dz * planes[p, 5]
-            tests += 1
-            if dn != 0.0:
-                t = ((planes[p, 0] - ox) * planes[p, 3] + (planes[p, 1] - oy) * planes[p, 4]
-                     + (planes[p, 2] - oz) * planes[p, 5]) / dn
-                if 0.0 < t < best:
-                    best = t
-                    prim = nb + p
-        if use_bvh:
-            sp = 0
-            nodes += 1
-            t = _slabs(nf, 0, 0, ox, oy, oz, ix, iy, iz, best)  # row 0 holds the root alone
-            if t < math.inf:
-                stack[0] = ni[0, 24]
-                scnt[0] = ni[0, 28]
-                snear[0] = t
-                sp = 1
-            q = 0
-            cnt = 0
-            go = False  # True: (q, cnt) is the next node, taken without a trip through the stack
-            while go or sp > 0:
-                if not go:
-                    sp -= 1
-                    if snear[sp] > best:
-                        continue
-                    q = stack[sp]
-                    cnt = scnt[sp]
-                go = False
-                if cnt >= 0:  # a leaf
-                    for j in range(q, q + cnt):
-                        k = order[j]
-                        tests += 1
-                        t = _prim_t(ox, oy, oz, dx, dy, dz, okx, oky, okz, kx, ky, kz, sx, sy, sz, k, j, nsph, sph, ltri, best)
-                        if 0.0 < t < best:
-                            best = t
-                            prim = k
-                    continue
-                row = np.uint64(q)  # unsigned: no negative-index wraparound on the row's loads
-                _slabs4(nf, row, ox, oy, oz, ix, iy, iz, best, dist)
-                # sort the four children by entry distance (then slot), without branches
-                d0, d1, d2, d3 = dist[0], dist[1], dist[2], dist[3]
-                c0, c1, c2, c3 = 0, 1, 2, 3
-                d0, c0, d1, c1 = _order(d0, c0, d1, c1)
-                d2, c2, d3, c3 = _order(d2, c2, d3, c3)
-                d0, c0, d2, c2 = _order(d0, c0, d2, c2)
-                d1, c1, d3, c3 = _order(d1, c1, d3, c3)
-                d1, c1, d2, c2 = _order(d1, c1, d2, c2)
-                nodes += (ni[row, 28] != -2) + (ni[row, 29] != -2) + (ni[row, 30] != -2) + (ni[row, 31] != -2)
-                # the others wait on the stack, far to near; a missed child (inf) is overwritten
-                stack[sp] = ni[row, 24 + c3]
-                scnt[sp] = ni[row, 28 + c3]
-                snear[sp] = d3
-                sp += d3 < math.inf
-                stack[sp] = ni[row, 24 + c2]
-                scnt[sp] = ni[row, 28 + c2]
-                snear[sp] = d2
-                sp += d2 < math.inf
-                stack[sp] = ni[row, 24 + c1]
-                scnt[sp] = ni[row, 28 + c1]
-                snear[sp] = d1
-                sp += d1 < math.inf
-                if d0 < math.inf:  # the nearest child is next
-                    q = ni[row, 24 + c0]
-                    cnt = ni[row, 28 + c0]
-                    go = True
-        else:
-            for k in range(nb):
-                tests += 1
-                if k < nsph:
-                    t0, t1 = _sphere_roots(ox, oy, oz, dx, dy, dz, sph, k)
-                    t = t0 if t0 > 0.0 else t1
-                else:
-                    t = _triangle(okx, oky, okz, kx, ky, kz, sx, sy, sz, tri, k - nsph, best)
-                if 0.0 < t < best:
-                    best = t
-                    prim = k
+        best, prim, nodes, tests = _closest_one(ox, oy, oz, dx, dy, dz, nf, ni, order, ltri, use_bvh, nsph, sph, tri,
+                                                planes, stack, scnt, snear, dist)
         out_t[i] = best
         out_prim[i] = prim
-        if prim < 0:
-            out_n[i, 0], out_n[i, 1], out_n[i, 2] = 0.0, 0.0, 0.0
-        elif prim < nsph:
-            r = sph[prim, 3]
-            for a in range(3):
-                out_n[i, a] = (O[i, a] + best * D[i, a] - sph[prim, a]) / r
-            length = math.sqrt(out_n[i, 0] ** 2 + out_n[i, 1] ** 2 + out_n[i, 2] ** 2)
-            for a in range(3):
-                out_n[i, a] /= length
-        elif prim < nb:
-            for a in range(3):
-                out_n[i, a] = tri_normal[prim - nsph, a]
-        else:
-            for a in range(3):
-                out_n[i, a] = planes[prim - nb, 3 + a]
+        out_n[i, 0], out_n[i, 1], out_n[i, 2] = _normal(prim, best, ox, oy, oz, dx, dy, dz, nsph, nb, sph, planes,
+                                                        tri_normal)
         stats[i, 0] = nodes
         stats[i, 1] = tests
 
 
-@njit(**_JIT)
-def _material(k, x, nb, prim_mat, planes, pframe, checker, checker_mat):
+@njit(**_INLINE)
+def _material(k, x0, x1, x2, nb, prim_mat, planes, pframe, checker, checker_mat):
+    """The material of primitive k at the point x: its own, or a checkerboard plane's odd squares'."""
     m = prim_mat[k]
     p = k - nb
     if p >= 0 and checker[p] > 0.0:
-        rx, ry, rz = x[0] - planes[p, 0], x[1] - planes[p, 1], x[2] - planes[p, 2]
+        rx, ry, rz = x0 - planes[p, 0], x1 - planes[p, 1], x2 - planes[p, 2]
         a = math.floor((rx * pframe[p, 0] + ry * pframe[p, 1] + rz * pframe[p, 2]) / checker[p])
         b = math.floor((rx * pframe[p, 3] + ry * pframe[p, 4] + rz * pframe[p, 5]) / checker[p])
         if (a + b) % 2 == 1:
@@ -315,251 +376,309 @@ def _material(k, x, nb, prim_mat, planes, pframe, checker, checker_mat):
     return m
 
 
-@njit(**_JIT)
-def _attenuate(T, k, t, o, d, nb, prim_mat, trans, planes, pframe, checker, checker_mat):
-    """Multiply T by the transmittance of primitive k crossed at t; True when T is now zero."""
-    x = np.empty(3)
-    for a in range(3):
-        x[a] = o[a] + t * d[a]
-    m = _material(k, x, nb, prim_mat, planes, pframe, checker, checker_mat)
-    zero = True
-    for a in range(3):
-        T[a] *= trans[m, a]
-        if T[a] > 0.0:
-            zero = False
-    return zero
+@njit(**_INLINE)
+def _attenuate(T0, T1, T2, k, t, ox, oy, oz, dx, dy, dz, nb, prim_mat, trans, planes, pframe, checker, checker_mat):
+    """(T0, T1, T2) times the transmittance of primitive k crossed at t, and whether it is now zero."""
+    m = _material(k, ox + t * dx, oy + t * dy, oz + t * dz, nb, prim_mat, planes, pframe, checker, checker_mat)
+    T0 *= trans[m, 0]
+    T1 *= trans[m, 1]
+    T2 *= trans[m, 2]
+    return T0, T1, T2, not (T0 > 0.0 or T1 > 0.0 or T2 > 0.0)
+
+
+@njit(**_INLINE)
+def _transmit_one(ox, oy, oz, dx, dy, dz, tmax, nf, ni, order, ltri, use_bvh, nsph, sph, tri, planes, pframe,
+                  checker, checker_mat, prim_mat, trans, stack, scnt, dist):
+    """One shadow ray: the product (T0, T1, T2) of the transmittances crossed on (0, tmax), zero once an
+    opaque surface is crossed (any hit: the search stops there), and (nodes, tests)."""
+    ix, iy, iz, kx, ky, kz, sx, sy, sz, okx, oky, okz = _setup(ox, oy, oz, dx, dy, dz, use_bvh, tri.shape[0] > 0)
+    nb = nsph + tri.shape[0]
+    T0, T1, T2 = 1.0, 1.0, 1.0
+    nodes = 0
+    tests = 0
+    blocked = False
+    for p in range(planes.shape[0]):
+        tests += 1
+        dn = dx * planes[p, 3] + dy * planes[p, 4] + dz * planes[p, 5]
+        if dn != 0.0:
+            t = ((planes[p, 0] - ox) * planes[p, 3] + (planes[p, 1] - oy) * planes[p, 4]
+                 + (planes[p, 2] - oz) * planes[p, 5]) / dn
+            if 0.0 < t < tmax:
+                T0, T1, T2, blocked = _attenuate(T0, T1, T2, nb + p, t, ox, oy, oz, dx, dy, dz, nb, prim_mat, trans,
+                                                 planes, pframe, checker, checker_mat)
+                if blocked:
+                    return 0.0, 0.0, 0.0, nodes, tests
+    sp = 0
+    if use_bvh:
+        stack[0] = 0
+        scnt[0] = -1
+        sp = 1
+        first, last = 0, 0
+    else:
+        first, last = 0, nb     # no hierarchy: one pass over every primitive
+    while True:
+        if first == last:       # the primitives in hand are done: open the next node
+            if sp == 0:
+                break
+            sp -= 1
+            q = stack[np.uint64(sp)]
+            cnt = scnt[np.uint64(sp)]
+            if cnt < 0:                    # a row: its children wait on the stack, the last slot on top
+                row = np.uint64(q)
+                _slabs4(nf, row, ox, oy, oz, ix, iy, iz, tmax, dist)
+                nodes += (ni[row * _ROW + np.uint64(28)] != -2) + (ni[row * _ROW + np.uint64(29)] != -2) + (ni[row * _ROW + np.uint64(30)] != -2) + (ni[row * _ROW + np.uint64(31)] != -2)
+                for c in range(4):
+                    stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(24 + c)]
+                    scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(28 + c)]
+                    sp += dist[c] < math.inf
+                continue
+            first, last = q, q + cnt
+        j = first
+        first += 1
+        k = order[j] if use_bvh else j
+        tests += 1
+        if k < nsph:
+            t0, t1 = _sphere_roots(ox, oy, oz, dx, dy, dz, sph, k)
+            if 0.0 < t0 < tmax:
+                T0, T1, T2, blocked = _attenuate(T0, T1, T2, k, t0, ox, oy, oz, dx, dy, dz, nb, prim_mat, trans,
+                                                 planes, pframe, checker, checker_mat)
+                if blocked:
+                    return 0.0, 0.0, 0.0, nodes, tests
+            if 0.0 < t1 < tmax:
+                T0, T1, T2, blocked = _attenuate(T0, T1, T2, k, t1, ox, oy, oz, dx, dy, dz, nb, prim_mat, trans,
+                                                 planes, pframe, checker, checker_mat)
+                if blocked:
+                    return 0.0, 0.0, 0.0, nodes, tests
+        else:
+            if use_bvh:
+                t = _triangle(okx, oky, okz, kx, ky, kz, sx, sy, sz, ltri, j, tmax)
+            else:
+                t = _triangle(okx, oky, okz, kx, ky, kz, sx, sy, sz, tri, k - nsph, tmax)
+            if t < tmax:
+                T0, T1, T2, blocked = _attenuate(T0, T1, T2, k, t, ox, oy, oz, dx, dy, dz, nb, prim_mat, trans,
+                                                 planes, pframe, checker, checker_mat)
+                if blocked:
+                    return 0.0, 0.0, 0.0, nodes, tests
+    return T0, T1, T2, nodes, tests
 
 
 @njit(**_JIT)
 def transmission(O, D, TMAX, nf, ni, order, ltri, use_bvh, nsph, sph, tri, planes, pframe,
-                 checker, checker_mat, prim_mat, trans, out, stats):
-    """Shadow rays: out[i] = product of the transmittances crossed on (0, TMAX[i]); stops at an opaque one."""
-    stack = np.empty(STACK, np.int64)
-    scnt = np.empty(STACK, np.int64)
-    T = np.empty(3)
-    nb = nsph + tri.shape[0]
+                 checker, checker_mat, prim_mat, trans, out, stats, stack, scnt, snear, dist, rays):
+    """Shadow rays: out[i] = product of the transmittances crossed on (0, TMAX[i]); stops at an opaque one.
+
+    The last five arguments are one thread's ``scratch()``.
+    """
     for i in range(O.shape[0]):
-        o = O[i]
-        d = D[i]
-        tmax = TMAX[i]
-        ox, oy, oz = O[i, 0], O[i, 1], O[i, 2]
-        dx, dy, dz = D[i, 0], D[i, 1], D[i, 2]
-        ix, iy, iz = 1.0 / dx, 1.0 / dy, 1.0 / dz
-        for a in range(3):
-            T[a] = 1.0
-        kx, ky, kz, sx, sy, sz, okx, oky, okz = _shear(ox, oy, oz, dx, dy, dz)
-        nodes = 0
-        tests = 0
-        blocked = False
-        for p in range(planes.shape[0]):
-            tests += 1
-            dn = d[0] * planes[p, 3] + d[1] * planes[p, 4] + d[2] * planes[p, 5]
-            if dn != 0.0:
-                t = ((planes[p, 0] - o[0]) * planes[p, 3] + (planes[p, 1] - o[1]) * planes[p, 4]
-                     + (planes[p, 2] - o[2]) * planes[p, 5]) / dn
-                if 0.0 < t < tmax:
-                    if _attenuate(T, nb + p, t, o, d, nb, prim_mat, trans, planes, pframe, checker, checker_mat):
-                        blocked = True
-                        break
-        sp = 0
-        if not blocked:
-            if use_bvh:
-                stack[0] = 0
-                scnt[0] = -1
-                sp = 1
-            else:
-                for k in range(nb):
-                    tests += 1
-                    if k < nsph:
-                        t0, t1 = _sphere_roots(ox, oy, oz, dx, dy, dz, sph, k)
-                        if 0.0 < t0 < tmax and _attenuate(T, k, t0, o, d, nb, prim_mat, trans, planes, pframe, checker, checker_mat):
-                            blocked = True
-                            break
-                        if 0.0 < t1 < tmax and _attenuate(T, k, t1, o, d, nb, prim_mat, trans, planes, pframe, checker, checker_mat):
-                            blocked = True
-                            break
-                    else:
-                        t = _triangle(okx, oky, okz, kx, ky, kz, sx, sy, sz, tri, k - nsph, tmax)
-                        if t < tmax and _attenuate(T, k, t, o, d, nb, prim_mat, trans, planes, pframe, checker, checker_mat):
-                            blocked = True
-                            break
-        while sp > 0 and not blocked:
-            sp -= 1
-            q = stack[sp]
-            cnt = scnt[sp]
-            if cnt >= 0:
-                for j in range(q, q + cnt):
-                    k = order[j]
-                    tests += 1
-                    if k < nsph:
-                        t0, t1 = _sphere_roots(ox, oy, oz, dx, dy, dz, sph, k)
-                        if 0.0 < t0 < tmax and _attenuate(T, k, t0, o, d, nb, prim_mat, trans, planes, pframe, checker, checker_mat):
-                            blocked = True
-                            break
-                        if 0.0 < t1 < tmax and _attenuate(T, k, t1, o, d, nb, prim_mat, trans, planes, pframe, checker, checker_mat):
-                            blocked = True
-                            break
-                    else:
-                        t = _triangle(okx, oky, okz, kx, ky, kz, sx, sy, sz, ltri, j, tmax)
-                        if t < tmax and _attenuate(T, k, t, o, d, nb, prim_mat, trans, planes, pframe, checker, checker_mat):
-                            blocked = True
-                            break
-            else:
-                for c in range(4):
-                    kc = ni[q, 28 + c]
-                    if kc == -2:
-                        break
-                    nodes += 1
-                    if _slabs(nf, q, c, ox, oy, oz, ix, iy, iz, tmax) < math.inf:
-                        stack[sp] = ni[q, 24 + c]
-                        scnt[sp] = kc
-                        sp += 1
-        for a in range(3):
-            out[i, a] = 0.0 if blocked else T[a]
+        out[i, 0], out[i, 1], out[i, 2], nodes, tests = _transmit_one(
+            O[i, 0], O[i, 1], O[i, 2], D[i, 0], D[i, 1], D[i, 2], TMAX[i], nf, ni, order, ltri, use_bvh, nsph, sph,
+            tri, planes, pframe, checker, checker_mat, prim_mat, trans, stack, scnt, dist)
         stats[i, 0] = nodes
         stats[i, 1] = tests
 
 
+@njit(**_JIT)
+def camera(eye, forward, right, up, tan_x, tan_y, width, height, O, D):
+    """W1's camera rays, in the numpy version's operations and order (so bit for bit the same rays)."""
+    for j in range(height):
+        y = (1.0 - 2.0 * (j + 0.5) / height) * tan_y
+        for i in range(width):
+            x = (2.0 * (i + 0.5) / width - 1.0) * tan_x
+            k = j * width + i
+            dx = (forward[0] + x * right[0]) + y * up[0]
+            dy = (forward[1] + x * right[1]) + y * up[1]
+            dz = (forward[2] + x * right[2]) + y * up[2]
+            length = math.sqrt(dx * dx + dy * dy + dz * dz)
+            D[k, 0], D[k, 1], D[k, 2] = dx / length, dy / length, dz / length
+            O[k, 0], O[k, 1], O[k, 2] = eye[0], eye[1], eye[2]
+
+
+# --- a whole Whitted frame, one camera ray at a time -------------------------------------------------
+# The same steps as the numpy wavefront of tracer.trace (handout §W11), in nearly the same floating-point
+# operations, so the two agree to rounding: a pixel's contributions are summed depth first here, bounce by
+# bounce there; unit vectors are scaled by one reciprocal instead of three divisions, and whole Phong
+# exponents are taken by repeated squaring (``_power``). Where a decision hangs on a sign (a light in
+# front of the surface, a side to spawn to) the two see the same (the tests compare the rays each casts).
+
+#: Columns of the material rows the frame kernel reads (``frame_arrays``).
+M_AMBIENT, M_DIFFUSE, M_SPECULAR, M_SHININESS, M_EMISSION = 0, 3, 6, 9, 10
+M_REFLECT, M_TRANSMIT, M_IOR, M_FRESNEL, M_WIDTH = 13, 16, 19, 20, 21
+#: Columns of the light rows: position, diffuse, specular, attenuation (constant, linear, quadratic),
+#: the emitting side of an area light and 1 where it has one.
+L_POS, L_DIFFUSE, L_SPECULAR, L_ATT, L_NORMAL, L_AREA, L_WIDTH = 0, 3, 6, 9, 12, 15, 16
+
+
+@njit(**_INLINE)
+def _spawn(px, py, pz, nx, ny, nz, dx, dy, dz, offset):
+    """``cs451.raytrace.spawn`` for one ray: off the surface by (1 + max|p|)·offset to the side it leaves by."""
+    side = nx * dx + ny * dy + nz * dz
+    s = 1.0 if side >= 0.0 else -1.0     # sign(0) counts as +1, as spawn does
+    scale = (1.0 + max(abs(px), abs(py), abs(pz))) * offset
+    return px + nx * (s * scale), py + ny * (s * scale), pz + nz * (s * scale)
+
+
+@njit(**_INLINE)
+def _push(rays, top, px, py, pz, nx, ny, nz, dx, dy, dz, w0, w1, w2, depth, offset):
+    """Put a secondary ray on the waiting stack: its direction normalised, its origin spawned off the surface."""
+    inv = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
+    dx, dy, dz = dx * inv, dy * inv, dz * inv
+    rays[top, 0], rays[top, 1], rays[top, 2] = _spawn(px, py, pz, nx, ny, nz, dx, dy, dz, offset)
+    rays[top, 3], rays[top, 4], rays[top, 5] = dx, dy, dz
+    rays[top, 6], rays[top, 7], rays[top, 8], rays[top, 9] = w0, w1, w2, depth
+    return top + 1
+
+
+@njit(**_INLINE)
+def _power(x, s):
+    """x ** s, by repeated squaring where s is a whole number below 2¹⁶ (as Phong exponents are): within a
+    few ulps of pow (so the frame agrees with the numpy path to rounding) and several times faster."""
+    if not (s == math.floor(s) and 0.0 <= s < 65536.0):
+        return x ** s
+    n = int(s)
+    r = 1.0
+    while n > 0:
+        if n & 1:
+            r *= x
+        x *= x
+        n >>= 1
+    return r
+
+
+@njit(**_INLINE)
+def _fresnel(cos_i, eta):
+    """W10 for one ray: unpolarised Fresnel reflectance, 1 under total internal reflection."""
+    cos_i = min(max(cos_i, 0.0), 1.0)
+    sin2_t = eta * eta * (1.0 - cos_i * cos_i)
+    if sin2_t >= 1.0:
+        return 1.0
+    cos_t = math.sqrt(max(0.0, 1.0 - sin2_t))
+    rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
+    rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
+    f = 0.5 * (rs * rs + rp * rp)
+    return 1.0 if math.isnan(f) else f
+
 
 @njit(**_JIT)
-def _area(lo, hi):
-    ex, ey, ez = hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]
-    return ex * ey + ey * ez + ez * ex
+def frame(O, D, nf, ni, order, ltri, use_bvh, nsph, sph, tri, planes, tri_normal, pframe, checker, checker_mat,
+          prim_mat, trans, mats, lights, ambient, background, max_depth, min_weight, offset, out, counts,
+          stack, scnt, snear, dist, rays):
+    """The colour out[i] seen along each camera ray (W11, per ray): closest hit, emission and ambient, each
+    light through its shadow ray, then the reflected and transmitted rays, depth first on a small stack.
 
-
-@njit(**_JIT)
-def build(lo, hi, leaf_size):
-    """Top-down build with a binned surface area heuristic (16 bins per axis), partitioning in place."""
-    bins = 16
-    n = lo.shape[0]
-    cen = 0.5 * (lo + hi)
-    order = np.arange(n)
-    cap = 2 * n + 1
-    nlo = np.empty((cap, 3))
-    nhi = np.empty((cap, 3))
-    child = np.full(cap, -1, np.int64)
-    start = np.zeros(cap, np.int64)
-    count = np.zeros(cap, np.int64)
-    stack = np.empty((cap, 3), np.int64)
-    stack[0, 0], stack[0, 1], stack[0, 2] = 0, 0, n
-    sp = 1
-    m = 1
-    blo = np.empty((bins, 3))
-    bhi = np.empty((bins, 3))
-    bcount = np.empty(bins, np.int64)
-    right_area = np.empty(bins)
-    acc_lo = np.empty(3)
-    acc_hi = np.empty(3)
-    clo = np.empty(3)
-    chi = np.empty(3)
-    while sp > 0:
-        sp -= 1
-        node, s, e = stack[sp, 0], stack[sp, 1], stack[sp, 2]
-        for a in range(3):
-            nlo[node, a], nhi[node, a] = math.inf, -math.inf
-            clo[a], chi[a] = math.inf, -math.inf
-        for j in range(s, e):
-            k = order[j]
-            for a in range(3):
-                nlo[node, a] = min(nlo[node, a], lo[k, a])
-                nhi[node, a] = max(nhi[node, a], hi[k, a])
-                clo[a] = min(clo[a], cen[k, a])
-                chi[a] = max(chi[a], cen[k, a])
-        cnt = e - s
-        if cnt <= leaf_size:
-            start[node] = s
-            count[node] = cnt
-            continue
-        best_cost, best_axis, best_bin = math.inf, -1, 0
-        for axis in range(3):
-            extent = chi[axis] - clo[axis]
-            if extent <= 0.0:
-                continue
-            for b in range(bins):
-                bcount[b] = 0
-                for a in range(3):
-                    blo[b, a], bhi[b, a] = math.inf, -math.inf
-            for j in range(s, e):
-                k = order[j]
-                b = min(int((cen[k, axis] - clo[axis]) / extent * bins), bins - 1)
-                bcount[b] += 1
-                for a in range(3):
-                    blo[b, a] = min(blo[b, a], lo[k, a])
-                    bhi[b, a] = max(bhi[b, a], hi[k, a])
-            for a in range(3):
-                acc_lo[a], acc_hi[a] = math.inf, -math.inf
-            for b in range(bins - 1, 0, -1):
-                for a in range(3):
-                    acc_lo[a] = min(acc_lo[a], blo[b, a])
-                    acc_hi[a] = max(acc_hi[a], bhi[b, a])
-                right_area[b] = _area(acc_lo, acc_hi)
-            for a in range(3):
-                acc_lo[a], acc_hi[a] = math.inf, -math.inf
-            left_n = 0
-            for b in range(bins - 1):
-                left_n += bcount[b]
-                for a in range(3):
-                    acc_lo[a] = min(acc_lo[a], blo[b, a])
-                    acc_hi[a] = max(acc_hi[a], bhi[b, a])
-                if left_n == 0 or left_n == cnt:
-                    continue
-                cost = _area(acc_lo, acc_hi) * left_n + right_area[b + 1] * (cnt - left_n)
-                if cost < best_cost:
-                    best_cost, best_axis, best_bin = cost, axis, b
-        if best_axis < 0:
-            mid = s + cnt // 2          # all centroids coincide: split the range in half
-        else:
-            extent = chi[best_axis] - clo[best_axis]
-            i, j = s, e - 1
-            while i <= j:              # partition: bins up to best_bin to the left
-                b = min(int((cen[order[i], best_axis] - clo[best_axis]) / extent * bins), bins - 1)
-                if b <= best_bin:
-                    i += 1
-                else:
-                    order[i], order[j] = order[j], order[i]
-                    j -= 1
-            mid = i
-        c = m
-        m += 2
-        child[node] = c
-        stack[sp, 0], stack[sp, 1], stack[sp, 2] = c + 1, mid, e
-        sp += 1
-        stack[sp, 0], stack[sp, 1], stack[sp, 2] = c, s, mid
-        sp += 1
-    return nlo[:m].copy(), nhi[:m].copy(), child[:m].copy(), start[:m].copy(), count[:m].copy(), order
-
-
-def _compiled(kernel, args: tuple) -> None:
-    """Compile (or load from numba's cache) kernel for these arguments with LLVM's SLP vectoriser on.
-
-    Numba leaves it off by default; it lets ``_slabs4`` test four boxes in a few vector instructions.
-    The switch is numba's own config value, set only while this compiles (results are the same either way).
+    counts[i] = (shadow, reflection, transmission, nodes visited, primitive tests) for camera ray i. The
+    last five arguments are one thread's ``scratch(max_depth)``: ``rays`` holds the waiting rays.
     """
-    from numba import typeof
-    from numba.core import config
-    sig = tuple(typeof(a) for a in args)
-    if sig in kernel.overloads:
-        return
-    old = config.SLP_VECTORIZE
-    config.SLP_VECTORIZE = 1
-    try:
-        kernel.compile(sig)
-    finally:
-        config.SLP_VECTORIZE = old
-
-
-def in_threads(kernel, n: int, row_args: tuple, shared: tuple, outs: tuple, threads: int = 2) -> None:
-    """Run ``kernel(*rows, *shared, *outs)`` over chunks of n rays in threads (the kernels release the GIL)."""
-    _compiled(kernel, (*row_args, *shared, *outs))
-    if n < 4096 or threads <= 1:
-        kernel(*row_args, *shared, *outs)
-        return
-    bounds = np.linspace(0, n, threads * 4 + 1).astype(int)
-
-    def run(k: int) -> None:
-        s, e = bounds[k], bounds[k + 1]
-        kernel(*(a[s:e] for a in row_args), *shared, *(a[s:e] for a in outs))
-
-    with ThreadPoolExecutor(threads) as pool:
-        list(pool.map(run, range(len(bounds) - 1)))
+    nb = nsph + tri.shape[0]
+    cut = max(min_weight, 1e-300)
+    for i in range(O.shape[0]):
+        c0, c1, c2 = 0.0, 0.0, 0.0
+        n_shadow, n_reflect, n_transmit, nodes, tests = 0, 0, 0, 0, 0
+        rays[0, 0], rays[0, 1], rays[0, 2] = O[i, 0], O[i, 1], O[i, 2]
+        rays[0, 3], rays[0, 4], rays[0, 5] = D[i, 0], D[i, 1], D[i, 2]
+        rays[0, 6], rays[0, 7], rays[0, 8], rays[0, 9] = 1.0, 1.0, 1.0, 0.0
+        top = 1
+        while top > 0:
+            top -= 1
+            ox, oy, oz = rays[top, 0], rays[top, 1], rays[top, 2]
+            dx, dy, dz = rays[top, 3], rays[top, 4], rays[top, 5]
+            b0, b1, b2 = rays[top, 6], rays[top, 7], rays[top, 8]
+            depth = int(rays[top, 9])
+            t, prim, nv, nt = _closest_one(ox, oy, oz, dx, dy, dz, nf, ni, order, ltri, use_bvh, nsph, sph, tri,
+                                           planes, stack, scnt, snear, dist)
+            nodes += nv
+            tests += nt
+            if prim < 0:
+                c0 += b0 * background[0]
+                c1 += b1 * background[1]
+                c2 += b2 * background[2]
+                continue
+            nx, ny, nz = _normal(prim, t, ox, oy, oz, dx, dy, dz, nsph, nb, sph, planes, tri_normal)
+            px, py, pz = ox + t * dx, oy + t * dy, oz + t * dz
+            m = _material(prim, px, py, pz, nb, prim_mat, planes, pframe, checker, checker_mat)
+            cos = -(dx * nx + dy * ny + dz * nz)
+            entering = cos >= 0.0
+            if not entering:                   # the normal on the ray's side
+                nx, ny, nz = -nx, -ny, -nz
+            l0 = mats[m, M_EMISSION] + mats[m, M_AMBIENT] * ambient[0]
+            l1 = mats[m, M_EMISSION + 1] + mats[m, M_AMBIENT + 1] * ambient[1]
+            l2 = mats[m, M_EMISSION + 2] + mats[m, M_AMBIENT + 2] * ambient[2]
+            kd0, kd1, kd2 = mats[m, M_DIFFUSE], mats[m, M_DIFFUSE + 1], mats[m, M_DIFFUSE + 2]
+            ks0, ks1, ks2 = mats[m, M_SPECULAR], mats[m, M_SPECULAR + 1], mats[m, M_SPECULAR + 2]
+            shiny = kd0 > 0.0 or kd1 > 0.0 or kd2 > 0.0 or ks0 > 0.0 or ks1 > 0.0 or ks2 > 0.0
+            for k in range(lights.shape[0] if shiny else 0):
+                # TraceScene.light_toward
+                vx, vy, vz = lights[k, L_POS] - px, lights[k, L_POS + 1] - py, lights[k, L_POS + 2] - pz
+                r = math.sqrt(vx * vx + vy * vy + vz * vz)
+                inv = 1.0 / (r if r > 0.0 else 1.0)
+                lx, ly, lz = vx * inv, vy * inv, vz * inv
+                att = 1.0 / (lights[k, L_ATT] + lights[k, L_ATT + 1] * r + lights[k, L_ATT + 2] * r * r)
+                if lights[k, L_AREA] > 0.0:
+                    att = att * max(-(lx * lights[k, L_NORMAL] + ly * lights[k, L_NORMAL + 1]
+                                      + lz * lights[k, L_NORMAL + 2]), 0.0)
+                if not r > 0.0:
+                    att = 0.0
+                ld0, ld1, ld2 = lights[k, L_DIFFUSE] * att, lights[k, L_DIFFUSE + 1] * att, lights[k, L_DIFFUSE + 2] * att
+                ls0, ls1, ls2 = (lights[k, L_SPECULAR] * att, lights[k, L_SPECULAR + 1] * att,
+                                 lights[k, L_SPECULAR + 2] * att)
+                n_dot_l = nx * lx + ny * ly + nz * lz
+                if not (n_dot_l > 0.0 and (ld0 > 0.0 or ld1 > 0.0 or ld2 > 0.0 or ls0 > 0.0 or ls1 > 0.0 or ls2 > 0.0)):
+                    continue                   # no shadow ray toward a light behind the surface
+                # the shadow ray (W7), from the spawned point to the light sample
+                sx, sy, sz = _spawn(px, py, pz, nx, ny, nz, lx, ly, lz, offset)
+                wx, wy, wz = lights[k, L_POS] - sx, lights[k, L_POS + 1] - sy, lights[k, L_POS + 2] - sz
+                length = math.sqrt(wx * wx + wy * wy + wz * wz)
+                inv = 1.0 / (length if length > 0.0 else 1.0)
+                T0, T1, T2, nv, nt = _transmit_one(sx, sy, sz, wx * inv, wy * inv, wz * inv, length, nf, ni, order, ltri,
+                                                   use_bvh, nsph, sph, tri, planes, pframe, checker, checker_mat,
+                                                   prim_mat, trans, stack, scnt, dist)
+                n_shadow += 1
+                nodes += nv
+                tests += nt
+                if T0 == 0.0 and T1 == 0.0 and T2 == 0.0:
+                    continue                   # in shadow: the terms below would add exact zeros
+                # local shading (W6), Lambert plus Blinn-Phong toward the eye (-d)
+                hx, hy, hz = lx - dx, ly - dy, lz - dz
+                inv = 1.0 / max(math.sqrt(hx * hx + hy * hy + hz * hz), 1e-300)
+                hx, hy, hz = hx * inv, hy * inv, hz * inv
+                n_dot_h = max(nx * hx + ny * hy + nz * hz, 0.0)
+                spec = _power(n_dot_h, mats[m, M_SHININESS])
+                lam = max(n_dot_l, 0.0)
+                l0 += kd0 * (ld0 * T0) * lam + ks0 * (ls0 * T0) * spec
+                l1 += kd1 * (ld1 * T1) * lam + ks1 * (ls1 * T1) * spec
+                l2 += kd2 * (ld2 * T2) * lam + ks2 * (ls2 * T2) * spec
+            c0 += b0 * l0
+            c1 += b1 * l1
+            c2 += b2 * l2
+            if depth == max_depth:
+                continue
+            kr0, kr1, kr2 = mats[m, M_REFLECT], mats[m, M_REFLECT + 1], mats[m, M_REFLECT + 2]
+            kt0, kt1, kt2 = mats[m, M_TRANSMIT], mats[m, M_TRANSMIT + 1], mats[m, M_TRANSMIT + 2]
+            ior = mats[m, M_IOR]
+            eta = 1.0 / ior if entering else ior
+            f = 0.0
+            tx, ty, tz = 0.0, 0.0, 0.0
+            if kt0 > 0.0 or kt1 > 0.0 or kt2 > 0.0:       # glass: refraction (W9), Fresnel (W10)
+                cos_i = -(dx * nx + dy * ny + dz * nz)
+                sin2_t = eta * eta * max(0.0, 1.0 - cos_i * cos_i)
+                if sin2_t > 1.0:
+                    f = 1.0                    # total internal reflection: all of kt is reflected
+                else:
+                    cos_t = math.sqrt(max(0.0, 1.0 - sin2_t))
+                    g = eta * cos_i - cos_t
+                    tx, ty, tz = eta * dx + g * nx, eta * dy + g * ny, eta * dz + g * nz
+                    if mats[m, M_FRESNEL] > 0.0:
+                        f = _fresnel(abs(cos), eta)
+            wr0, wr1, wr2 = b0 * (kr0 + kt0 * f), b1 * (kr1 + kt1 * f), b2 * (kr2 + kt2 * f)
+            wt0, wt1, wt2 = b0 * kt0 * (1.0 - f), b1 * kt1 * (1.0 - f), b2 * kt2 * (1.0 - f)
+            if max(wt0, wt1, wt2) >= cut:     # the β cut-off
+                top = _push(rays, top, px, py, pz, nx, ny, nz, tx, ty, tz, wt0, wt1, wt2, depth + 1, offset)
+                n_transmit += 1
+            if max(wr0, wr1, wr2) >= cut:
+                g = 2.0 * (dx * nx + dy * ny + dz * nz)
+                top = _push(rays, top, px, py, pz, nx, ny, nz, dx - g * nx, dy - g * ny, dz - g * nz, wr0, wr1, wr2,
+                            depth + 1, offset)
+                n_reflect += 1
+        out[i, 0], out[i, 1], out[i, 2] = c0, c1, c2
+        counts[i, 0], counts[i, 1], counts[i, 2], counts[i, 3], counts[i, 4] = (n_shadow, n_reflect, n_transmit,
+                                                                                 nodes, tests)
 # END SOLUTION

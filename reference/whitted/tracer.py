@@ -30,6 +30,10 @@ def trace(scene: TraceScene, origins: np.ndarray, directions: np.ndarray) -> np.
     origins = np.asarray(origins, dtype=np.float64)
     directions = np.asarray(directions, dtype=np.float64)
     n = len(origins)
+    from . import bvh
+    if bvh.use_compiled(n) and bvh.FRAME_KERNEL:   # a large batch: the same recursion per camera ray, compiled
+        from .frame import trace_frame
+        return trace_frame(scene, origins, directions)
     colour = np.zeros((n, 3))
     scene.counters["camera"] += n
     o, d, beta, pixel = origins, directions, np.ones((n, 3)), np.arange(n)

@@ -1,0 +1,106 @@
+"""Driving the Whitted reference's compiled kernels directly, for the bench: closest-hit and shadow-ray
+queries without the stage's scaffolding, a thread count for a while, and the rays a frame casts.
+
+These reach into the reference's own modules (kernels, hierarchy, running, bvh, tracer), which are not
+part of the stage's interface: the bench measures the reference, not a submission.
+"""
+from __future__ import annotations
+
+import contextlib
+import importlib
+import math
+import time
+from types import ModuleType, SimpleNamespace
+from typing import Callable, Iterator
+
+import numpy as np
+
+from cs451.raytrace import TraceScene
+
+
+def best_of(fn: Callable[[], object], repeats: int) -> float:
+    """The shortest of ``repeats`` wall-clock runs of fn, in seconds."""
+    best = math.inf
+    for _ in range(repeats):
+        start = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
+def reference_parts(impl: ModuleType) -> SimpleNamespace:
+    """The reference's compiled pieces the bench drives directly."""
+    part = lambda name: importlib.import_module(f"{impl.__name__}.{name}")
+    return SimpleNamespace(kernels=part("kernels"), hierarchy=part("hierarchy"), running=part("running"),
+                           bvh=part("bvh"), tracer=part("tracer"))
+
+
+def closest_queries(ref: SimpleNamespace, ts: TraceScene) -> Callable[[np.ndarray, np.ndarray], tuple]:
+    """Closest-hit queries through the compiled kernel alone; the function returns (t, prim, stats)."""
+    p = ref.hierarchy.packed(ts)
+    shared = (*p["tree"], p["nsph"], p["sph"], p["tri"], p["planes"], p["tri_normal"])
+
+    def run(o: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        n = len(o)
+        t, prim, nrm, stats = np.empty(n), np.empty(n, np.int64), np.empty((n, 3)), np.empty((n, 2), np.int64)
+        ref.running.in_threads(ref.kernels.closest, n, (o, d), shared, (t, prim, nrm, stats), ref.kernels.scratch())
+        return t, prim, stats
+    return run
+
+
+def shadow_queries(ref: SimpleNamespace, ts: TraceScene) -> Callable[[np.ndarray, np.ndarray, np.ndarray], None]:
+    """Shadow-ray queries (origins, unit directions, lengths) through the compiled any-hit kernel alone."""
+    p = ref.hierarchy.packed(ts)
+    shared = (*p["tree"], p["nsph"], p["sph"], p["tri"], p["planes"], p["frame"], ts.plane_checker,
+              ts.plane_checker_material, ts.prim_material, ts.mat_transmittance)
+
+    def run(o: np.ndarray, d: np.ndarray, dist: np.ndarray) -> None:
+        n = len(o)
+        ref.running.in_threads(ref.kernels.transmission, n, (o, d, dist), shared,
+                               (np.empty((n, 3)), np.empty((n, 2), np.int64)), ref.kernels.scratch())
+    return run
+
+
+@contextlib.contextmanager
+def threads(ref: SimpleNamespace, n: int) -> Iterator[None]:
+    """The reference's kernels on n threads for a while."""
+    saved = ref.running.THREADS
+    ref.running.THREADS = n
+    try:
+        yield
+    finally:
+        ref.running.THREADS = saved
+
+
+def frame_rays(ref: SimpleNamespace, ts: TraceScene, o: np.ndarray, d: np.ndarray) -> dict[str, tuple]:
+    """The rays a frame casts, by query: closest hit (origins, directions: camera rays and every reflected
+    and refracted one) and shadow (origins, unit directions, lengths).
+
+    Found by tracing the frame bounce by bounce (the path the frame kernel replaces, same rays) with the
+    tracer's two queries wrapped to record what they are asked.
+    """
+    asked: dict[str, list] = {"closest": [], "shadow": []}
+    closest_hit, shadow_transmission = ref.tracer.closest_hit, ref.tracer.shadow_transmission
+
+    def closest(scene, origins, directions):
+        asked["closest"].append((origins, directions))
+        return closest_hit(scene, origins, directions)
+
+    def shadow(scene, origins, targets):
+        asked["shadow"].append((origins, targets))
+        return shadow_transmission(scene, origins, targets)
+
+    saved = ref.bvh.FRAME_KERNEL
+    ref.tracer.closest_hit, ref.tracer.shadow_transmission, ref.bvh.FRAME_KERNEL = closest, shadow, False
+    try:
+        ref.tracer.trace(ts, o, d)
+    finally:
+        ref.tracer.closest_hit, ref.tracer.shadow_transmission, ref.bvh.FRAME_KERNEL = (closest_hit, shadow_transmission,
+                                                                                         saved)
+    co = np.ascontiguousarray(np.concatenate([a for a, _ in asked["closest"]]))
+    cd = np.ascontiguousarray(np.concatenate([b for _, b in asked["closest"]]))
+    so = np.ascontiguousarray(np.concatenate([a for a, _ in asked["shadow"]] or [np.zeros((0, 3))]))
+    seg = np.concatenate([b for _, b in asked["shadow"]] or [np.zeros((0, 3))]) - so
+    dist = np.linalg.norm(seg, axis=1)
+    sd = np.ascontiguousarray(seg / np.where(dist > 0, dist, 1.0)[:, None])
+    return {"closest": (co, cd), "shadow": (so, sd, dist)}

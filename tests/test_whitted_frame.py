@@ -1,0 +1,240 @@
+"""Stage 2's fast paths: the compiled whole-frame kernel against the numpy wavefront (what the grader runs)
+and against the per-bounce compiled path, the hierarchy and layout caches, the four-wide layout, the
+compile message, and the scaffolding's caches (meshes read once, hierarchies checked once)."""
+from __future__ import annotations
+
+import contextlib
+import importlib
+
+import numpy as np
+import pytest
+
+from cs451 import raytrace
+from cs451.impl import load_impl, resolve_impl
+from cs451.scene import BUNDLED_DIR, load_scene, parse_scene
+from cs451.stages import whitted
+
+RAY_COUNTERS = ("camera", "shadow", "reflection", "transmission")
+
+
+@pytest.fixture(scope="module")
+def ref():
+    return load_impl(resolve_impl("reference", "whitted"), "whitted")
+
+
+def part(ref, name: str):
+    return importlib.import_module(f"{ref.__name__}.{name}")
+
+
+@contextlib.contextmanager
+def path(ref, compiled: bool, frame: bool = True):
+    """Run the reference on its numpy path, or on the compiled one (whole frames or bounce by bounce)."""
+    bvh = part(ref, "bvh")
+    saved = bvh.COMPILED_RAYS, bvh._compiled[0], bvh.FRAME_KERNEL
+    bvh.COMPILED_RAYS, bvh._compiled[0], bvh.FRAME_KERNEL = (0 if compiled else 10**12), compiled, frame
+    try:
+        yield
+    finally:
+        bvh.COMPILED_RAYS, bvh._compiled[0], bvh.FRAME_KERNEL = saved
+
+
+def traced(ref, scene, size, **modes):
+    ts = whitted.prepare(scene, ref)
+    o, d = ref.camera_rays(scene.camera, *size)
+    with path(ref, **modes):
+        colour = ref.trace(ts, o, d)
+    return colour, dict(ts.counters)
+
+
+def scenes():
+    import sys
+    sys.path.insert(0, str(BUNDLED_DIR.parent.parent))
+    from autograder.whitted.public import LIGHT_BEHIND, two_mirrors
+    out = [(name, load_scene(name)) for name in ("whitted", "cornell-spheres", "cornell-box", "rippled-torus")]
+    return out + [("two mirrors", parse_scene(two_mirrors(0.5, 0.1, 10))), ("light behind", parse_scene(LIGHT_BEHIND))]
+
+
+def test01_frame_kernel_agrees_with_the_numpy_wavefront(ref):
+    """The grader's numpy path and the compiled frame cast the same rays and see the same colours.
+
+    Equality gives way to a tolerance: the frame sums a pixel's contributions depth first (a ray, then
+    its reflection's subtree, then its transmission's), the wavefront bounce by bounce, and the area
+    light's cosine is a BLAS product there; measured differences are below 4e-14.
+    """
+    for name, scene in scenes():
+        a, ca = traced(ref, scene, (40, 30), compiled=False)
+        b, cb = traced(ref, scene, (40, 30), compiled=True)
+        assert {k: ca[k] for k in RAY_COUNTERS} == {k: cb[k] for k in RAY_COUNTERS}, name
+        assert np.allclose(a, b, rtol=1e-12, atol=1e-12), f"{name}: differs by {np.abs(a - b).max():.3g}"
+        assert cb["camera"] == 1200 and (name != "whitted" or cb["reflection"] > 0 and cb["transmission"] > 0)
+
+
+def test02_frame_kernel_does_the_work_of_the_per_bounce_compiled_path(ref):
+    """The same closest-hit and shadow traversals, so every counter matches, nodes and tests included."""
+    seen = {}
+    for name, scene in scenes():
+        a, ca = traced(ref, scene, (64, 48), compiled=True, frame=False)
+        b, cb = traced(ref, scene, (64, 48), compiled=True, frame=True)
+        assert ca == cb, name
+        assert np.allclose(a, b, rtol=1e-12, atol=1e-12), f"{name}: differs by {np.abs(a - b).max():.3g}"
+        seen[name] = cb
+    # the counters tell runs apart: a higher cut-off casts fewer reflections
+    scene = load_scene("whitted")
+    ts = whitted.prepare(scene, ref, min_weight=0.5)
+    with path(ref, compiled=True):
+        ref.trace(ts, *ref.camera_rays(scene.camera, 64, 48))
+    assert 0 < ts.counters["reflection"] < seen["whitted"]["reflection"]
+
+
+def test03_a_hierarchy_is_built_once_per_geometry(ref):
+    hierarchy = part(ref, "hierarchy")
+    scene = load_scene("rippled-torus")
+    whitted.render_traced(scene, ref, (16, 12))
+    before = hierarchy.cache_counts()
+    for _ in range(2):
+        whitted.render_traced(scene, ref, (16, 12))
+    after = hierarchy.cache_counts()
+    assert after["hierarchies_built"] == before["hierarchies_built"]
+    assert after["hierarchies_reused"] == before["hierarchies_reused"] + 2
+    # the compiled kernels' layout is reused too, once a compiled batch has asked for it
+    with path(ref, compiled=True):
+        whitted.render_traced(scene, ref, (16, 12))
+        mid = hierarchy.cache_counts()
+        whitted.render_traced(scene, ref, (16, 12))
+    end = hierarchy.cache_counts()
+    assert end["layouts_built"] == mid["layouts_built"] and end["layouts_reused"] == mid["layouts_reused"] + 1
+    # another geometry is another hierarchy
+    ts = raytrace.build(scene)
+    lo, hi = ts.bounds()
+    ref.build_bvh(lo * 2.0, hi * 2.0)
+    assert hierarchy.cache_counts()["hierarchies_built"] == end["hierarchies_built"] + 1
+
+
+def test04_a_cached_hierarchy_is_what_a_fresh_build_gives_and_cannot_be_spoilt(ref):
+    hierarchy = part(ref, "hierarchy")
+    lo, hi = raytrace.build(load_scene("rippled-torus")).bounds()
+    first = ref.build_bvh(lo, hi)
+    fresh = dict(zip(raytrace.BVH_KEYS, hierarchy.build(lo, hi, part(ref, "bvh").LEAF_SIZE)))
+    assert all(np.array_equal(first[k], fresh[k]) for k in raytrace.BVH_KEYS)
+    first["order"][:] = 0                                  # a caller scribbles on what it was handed
+    again = ref.build_bvh(lo, hi)
+    assert np.array_equal(again["order"], fresh["order"])
+
+
+def test05_four_wide_layout_holds_every_node_once_in_boxes_that_contain_it(ref):
+    hierarchy = part(ref, "hierarchy")
+    ts = whitted.prepare(load_scene("rippled-torus"), ref)
+    bvh = ts.bvh
+    tri = np.concatenate([ts.tri_v0, ts.tri_v1, ts.tri_v2], axis=1)
+    nf, ni, order, ltri, use = hierarchy.four_wide(bvh, ts.n_spheres, tri)
+    assert use and nf.ctypes.data % 64 == 0 and ni.shape[1] == 32
+    kind, ref_ = ni[:, 28:32], ni[:, 24:28]
+    # every leaf of the binary tree is one slot (its start and count kept), inner slots point at rows
+    leaves = np.nonzero(bvh["child"] < 0)[0]
+    slots = kind >= 0
+    assert slots.sum() == len(leaves)
+    assert sorted(zip(ref_[slots], kind[slots])) == sorted(zip(bvh["start"][leaves], bvh["count"][leaves]))
+    inner = kind == -1
+    assert sorted(ref_[inner].tolist()) == list(range(1, len(ni)))   # each row but the root's, once
+    assert np.all((kind == -2) | (kind == -1) | (kind > 0))
+    # float32 boxes hold what they stand for: each leaf slot's box contains its triangles' corners
+    is_tri = order >= ts.n_spheres
+    for q, c in zip(*np.nonzero(slots)):
+        box_lo, box_hi = nf[q, [c, 4 + c, 8 + c]], nf[q, [12 + c, 16 + c, 20 + c]]
+        first, last = ni[q, 24 + c], ni[q, 24 + c] + ni[q, 28 + c]
+        t = ltri[first:last][is_tri[first:last]].reshape(-1, 3)
+        assert np.all(t >= box_lo) and np.all(t <= box_hi)
+    assert np.array_equal(ltri[is_tri], tri[order[is_tri] - ts.n_spheres]) and not ltri[~is_tri].any()
+
+
+def test06_the_first_compile_says_so_once(ref, capsys):
+    from numba import njit
+    running = part(ref, "running")
+    saved = running._said[0]
+    running._said[0] = False
+    try:
+        running.compiled(njit(lambda x: x + 1), (1.0,))
+        running.compiled(njit(lambda x: x * 2), (1.0,))
+    finally:
+        running._said[0] = saved
+    said = capsys.readouterr().err
+    assert said.count("compiling the ray tracer's kernels, once") == 1
+
+
+def test07_meshes_are_read_once_and_reread_when_the_file_changes(tmp_path):
+    obj = tmp_path / "tri.obj"
+    obj.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    v, f = raytrace.load_mesh(obj, "objects[0].file")
+    v[:] = 7.0                                             # the caller's copy, not the cache's
+    again, _ = raytrace.load_mesh(obj, "objects[0].file")
+    assert np.array_equal(again, [[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    obj.write_text("v 0 0 0\nv 2 0 0\nv 0 2 0\nv 5 5 5\nf 1 2 3\n")
+    changed, _ = raytrace.load_mesh(obj, "objects[0].file")
+    assert changed[1, 0] == 2.0
+
+
+def test08_a_hierarchy_checked_before_is_judged_the_same_and_a_changed_one_again(ref):
+    lo, hi = raytrace.build(load_scene("cornell-box")).bounds()
+    good = {k: np.array(v) for k, v in ref.build_bvh(lo, hi).items()}
+    assert raytrace.bvh_problems(good, lo, hi) == [] == raytrace.bvh_problems(good, lo, hi)
+    bad = {k: v.copy() for k, v in good.items()}
+    bad["order"][0] = bad["order"][1]
+    first = raytrace.bvh_problems(bad, lo, hi)
+    assert first and raytrace.bvh_problems(bad, lo, hi) == first
+    assert raytrace.bvh_problems({**good, "order": [[1, 2], [3]]}, lo, hi)   # unkeyable input is still judged
+
+
+def test09_compiled_camera_rays_are_numpys_bit_for_bit(ref):
+    for name in ("whitted", "cornell-box", "rippled-torus"):
+        camera = load_scene(name).camera
+        for size in ((97, 61), (1, 1), (320, 240)):
+            with path(ref, compiled=False):
+                a = ref.camera_rays(camera, *size)
+            with path(ref, compiled=True):
+                b = ref.camera_rays(camera, *size)
+            assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1]), (name, size)
+
+
+def bench_module(name: str):
+    import sys
+    sys.path.insert(0, str(BUNDLED_DIR.parent.parent))
+    return importlib.import_module(f"bench.{name}")
+
+
+def test10_the_bench_records_every_ray_a_frame_casts(ref):
+    kernels = bench_module("whitted_kernels")
+    parts = kernels.reference_parts(ref)
+    for name in ("whitted", "rippled-torus"):
+        scene = load_scene(name)
+        ts = whitted.prepare(scene, ref)
+        o, d = ref.camera_rays(scene.camera, 40, 30)
+        with path(ref, compiled=True):
+            rays = kernels.frame_rays(parts, ts, o, d)
+        c = ts.counters
+        assert len(rays["closest"][0]) == c["camera"] + c["reflection"] + c["transmission"]
+        assert len(rays["shadow"][0]) == c["shadow"] > 0
+        assert np.allclose(np.linalg.norm(rays["shadow"][1], axis=1), 1.0)
+        assert part(ref, "bvh").FRAME_KERNEL                 # put back as it was
+
+
+def test11_mitsuba_is_handed_the_same_camera_and_geometry(ref, tmp_path):
+    """Where the kit's camera rays see nothing, Mitsuba's frame of the converted scene is black, and the
+    converted scene's lit pixels are where the kit's rays hit something."""
+    mi = pytest.importorskip("mitsuba")
+    convert = bench_module("whitted_mitsuba")
+    mi.set_variant(convert.VARIANT)
+    for name in ("rippled-torus", "cornell-spheres"):
+        scene = load_scene(name)
+        ts = raytrace.build(scene)
+        image = np.array(mi.render(mi.load_dict(convert.mitsuba_dict(scene, ts, (48, 36), 4, tmp_path)), spp=4))
+        o, d = ref.camera_rays(scene.camera, 48, 36)
+        with path(ref, compiled=False):
+            _, prim, _ = ref.closest_hit(whitted.prepare(scene, ref), o, d)
+        seen = (prim >= 0).reshape(36, 48)
+        near = np.zeros_like(seen)                         # Mitsuba's samples spread over the pixel: one pixel of slack
+        for dy in (-1, 0, 1):
+            for dx in (-1, 0, 1):
+                near |= np.roll(np.roll(seen, dy, 0), dx, 1)
+        lit = image[..., :3].max(axis=2) > 0
+        assert image.shape[:2] == (36, 48) and lit.mean() > 0.2
+        assert not (lit & ~near).any(), f"{name}: Mitsuba lights pixels where the kit sees background"
