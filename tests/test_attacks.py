@@ -16,7 +16,6 @@ import os
 import shutil
 import stat
 import subprocess
-import tempfile
 import uuid
 from dataclasses import dataclass
 from pathlib import Path
@@ -404,8 +403,18 @@ def test16_without_isolation_a_kit_refuses_to_run_a_submission(corpus, monkeypat
         grade("sphere", attack(corpus, "refused"), show_progress=False, tasks=["S1"])
 
 
-def test17_temporary_folders_are_left_clean():
-    assert not list(Path(tempfile.gettempdir()).glob("cs451-run-*/*/upload"))
+def test17_a_grading_run_leaves_no_folder_behind(corpus, monkeypatch):
+    """The run folder (staged upload, engine, job folders) goes when grading ends, even after a hostile test."""
+    seen = []
+    opened = sandbox.Sandbox._open
+
+    def remember(self):
+        opened(self)
+        seen.append(self.run_dir.parent)
+    monkeypatch.setattr(sandbox.Sandbox, "_open", remember)
+    code, _ = WORKER_LEFTOVERS["status.json is a FIFO"]
+    run_local(attack(corpus, "leaves-nothing", code))
+    assert seen and not [p for p in seen if p.exists()]
 
 
 def test18_a_direct_solve_posing_as_progressive_refinement_earns_nothing_for_r3():
