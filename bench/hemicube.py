@@ -35,6 +35,7 @@ from cs451.patches import scene_polygons
 
 from bench.meshes import subdivide_uniform
 from cs451.scene import load_scene
+from cs451.stages.hemicube import calls
 
 
 def _impl():
@@ -75,7 +76,7 @@ def closed_forms(impl, resolutions: list[int], ctx) -> list[dict]:
             errors, seconds = [], []
             for seed in range(seeds):
                 split = 4 if proximity == "split4" else 1
-                ff = HemicubeFormFactors(quads, impl, resolution=res, proximity="none" if split > 1 else proximity,
+                ff = HemicubeFormFactors(quads, calls(impl), resolution=res, proximity="none" if split > 1 else proximity,
                                          rotate=seeds > 1, seed=seed, shooter_split=split, ctx=ctx)
                 ff.tables, ff.renderer               # build the GPU state outside the timing
                 t0 = time.perf_counter()
@@ -101,12 +102,12 @@ def cornell(impl, resolutions: list[int], reference_resolution: int, k: int, sam
     n = len(quads)
     probe_rows = list(range(0, n, 8))
     t0 = time.perf_counter()
-    ref_ff = HemicubeFormFactors(quads, impl, resolution=reference_resolution, proximity="none", ctx=ctx)
+    ref_ff = HemicubeFormFactors(quads, calls(impl), resolution=reference_resolution, proximity="none", ctx=ctx)
     reference = ref_ff.rows(probe_rows)
     ref_seconds = time.perf_counter() - t0
     hemi = []
     for res in resolutions:
-        ff = HemicubeFormFactors(quads, impl, resolution=res, proximity="none", ctx=ctx)
+        ff = HemicubeFormFactors(quads, calls(impl), resolution=res, proximity="none", ctx=ctx)
         ff.tables, ff.renderer
         t0 = time.perf_counter()
         F = ff.matrix()
@@ -118,13 +119,13 @@ def cornell(impl, resolutions: list[int], reference_resolution: int, k: int, sam
                      "readbacks": report["readbacks"], "patches_culled": report["patches_culled"],
                      "seconds_render": ff.seconds["render"], "seconds_sum": ff.seconds["sum"]})
     # with the proximity fix, once, at 128: what it costs and how far it moves the answer
-    ff = HemicubeFormFactors(quads, impl, resolution=128, proximity="contour", ctx=ctx)
+    ff = HemicubeFormFactors(quads, calls(impl), resolution=128, proximity="contour", ctx=ctx)
     ff.tables, ff.renderer
     t0 = time.perf_counter()
     ff.matrix()
     fix = {"resolution": 128, "seconds_matrix": time.perf_counter() - t0, "proximity_pairs": ff.counters["proximity_pairs"],
            "reciprocity_error_total": ff.report()["reciprocity_error_total"]}
-    ff = HemicubeFormFactors(quads, impl, resolution=128, proximity="none", shooter_split=2, ctx=ctx)
+    ff = HemicubeFormFactors(quads, calls(impl), resolution=128, proximity="none", shooter_split=2, ctx=ctx)
     ff.tables, ff.renderer
     t0 = time.perf_counter()
     ff.matrix()

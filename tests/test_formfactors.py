@@ -14,6 +14,7 @@ from cs451.formfactors import HemicubeFormFactors, clip_polygon_to_plane, formfa
 from cs451.impl import load_impl, resolve_impl
 from cs451.patches import patch_areas, patch_centers, patch_normals, patch_triangles, polygon_to_quads, scene_polygons
 from cs451.scene import load_scene
+from cs451.stages.hemicube import calls
 
 from bench.meshes import subdivide_uniform
 
@@ -72,9 +73,9 @@ def test05_clipping_and_gauss_points():
 # --- rows against closed forms ---------------------------------------------------------------
 
 def test06_opposed_and_perpendicular_unit_squares_with_the_proximity_fix(ref):
-    ff = HemicubeFormFactors(truth.opposed_squares(1, 1), ref, resolution=32)
+    ff = HemicubeFormFactors(truth.opposed_squares(1, 1), calls(ref), resolution=32)
     assert ff.matrix()[0, 1] == pytest.approx(0.19982, abs=2e-5)
-    ff = HemicubeFormFactors(truth.perpendicular_squares(1, 1), ref, resolution=32)
+    ff = HemicubeFormFactors(truth.perpendicular_squares(1, 1), calls(ref), resolution=32)
     F = ff.matrix()
     assert F[0, 1] == pytest.approx(0.20004, abs=2e-5) and F[1, 0] == pytest.approx(0.20004, abs=2e-5)
     assert ff.counters["proximity_pairs"] == 2
@@ -83,7 +84,7 @@ def test06_opposed_and_perpendicular_unit_squares_with_the_proximity_fix(ref):
 def test06b_splitting_the_shooter_converges_as_one_over_k_squared(ref):
     errors = []
     for k in (1, 2, 4):
-        ff = HemicubeFormFactors(truth.opposed_squares(1, 1), ref, resolution=64, proximity="none", shooter_split=k)
+        ff = HemicubeFormFactors(truth.opposed_squares(1, 1), calls(ref), resolution=64, proximity="none", shooter_split=k)
         errors.append(abs(ff.row(0)[1] / truth.howell_c11(1, 1, 1) - 1))
         assert ff.counters["hemicubes_rendered"] == k * k and ff.counters["rows_computed"] == 1
     assert errors[0] > 0.19 and errors[1] < errors[0] / 3.5 and errors[2] < errors[1] / 3.5 and errors[2] < 0.015
@@ -94,7 +95,7 @@ def test07_without_the_fix_the_hemicube_converges_to_the_point_form_factor(ref):
     point = truth.contour([0.5, 0.5, 0], [0, 0, 1], q[1])                # 0.2395: the proximity error
     errors = []
     for res in (16, 64, 256):
-        ff = HemicubeFormFactors(q, ref, resolution=res, proximity="none", rotate=False)
+        ff = HemicubeFormFactors(q, calls(ref), resolution=res, proximity="none", rotate=False)
         errors.append(abs(ff.row(0)[1] - point) / point)
     assert errors[-1] < 5e-4 and errors[-1] < errors[0]
     assert abs(point - truth.howell_c11(1, 1, 1)) > 0.03                 # no resolution reaches the exact value
@@ -102,13 +103,13 @@ def test07_without_the_fix_the_hemicube_converges_to_the_point_form_factor(ref):
 
 def test08_small_patch_under_a_disk(ref):
     q = truth.small_patch_under_disk(0.01, 1.0, 1.0, 128)
-    ff = HemicubeFormFactors(q, ref, resolution=128, proximity="none", rotate=True)
+    ff = HemicubeFormFactors(q, calls(ref), resolution=128, proximity="none", rotate=True)
     assert ff.row(0)[1:].sum() == pytest.approx(truth.polygon_disk(1.0, 1.0, 128), rel=2e-3)
 
 
 def test09_closed_cube_rows_sum_to_one_and_are_reciprocal(ref):
     q = np.array(truth.cube(2), float)
-    ff = HemicubeFormFactors(q, ref, resolution=64, proximity="none")
+    ff = HemicubeFormFactors(q, calls(ref), resolution=64, proximity="none")
     F = ff.matrix()
     assert np.abs(F.sum(axis=1) - 1).max() < 3e-3
     assert np.allclose(np.diag(F), 0)
@@ -118,7 +119,7 @@ def test09_closed_cube_rows_sum_to_one_and_are_reciprocal(ref):
     A = patch_areas(q)[:, None]
     assert np.abs(A * F - (A * F).T).max() > 0.05 * (A * F).max()
     # ... until the fix replaces them by exact area averages
-    G = HemicubeFormFactors(q, ref, resolution=64, proximity="contour").matrix()
+    G = HemicubeFormFactors(q, calls(ref), resolution=64, proximity="contour").matrix()
     assert np.abs(A * G - (A * G).T).max() < 0.01 * (A * G).max()
     assert np.abs(G.sum(axis=1) - 1).max() < 0.01
 
@@ -127,7 +128,7 @@ def test09_closed_cube_rows_sum_to_one_and_are_reciprocal(ref):
 
 def test10_rows_are_lazy_cached_and_batched(ref):
     q = np.array(truth.cube(2), float)
-    ff = HemicubeFormFactors(q, ref, resolution=16, batch=8, proximity="none")
+    ff = HemicubeFormFactors(q, calls(ref), resolution=16, batch=8, proximity="none")
     assert ff.counters["hemicubes_rendered"] == 0 and ff._renderer is None     # nothing until asked
     first = ff.row(3)
     assert ff.counters["hemicubes_rendered"] == 1 and ff.counters["rows_computed"] == 1
@@ -142,8 +143,8 @@ def test10_rows_are_lazy_cached_and_batched(ref):
 
 def test11_batching_does_not_change_rows(ref):
     q = np.array(truth.cube(2), float)
-    a = HemicubeFormFactors(q, ref, resolution=16, batch=1, seed=7).matrix()
-    b = HemicubeFormFactors(q, ref, resolution=16, batch=100, seed=7).matrix()
+    a = HemicubeFormFactors(q, calls(ref), resolution=16, batch=1, seed=7).matrix()
+    b = HemicubeFormFactors(q, calls(ref), resolution=16, batch=100, seed=7).matrix()
     assert np.array_equal(a, b)
 
 
@@ -153,7 +154,7 @@ def test11b_new_colours_reuse_every_row(ref):
     from cs451.scene import BUNDLED_DIR, parse_scene
     data = json.loads((BUNDLED_DIR / "cornell-box.json").read_text())
     quads, _, emission = scene_polygons(parse_scene(data, "cb"))
-    ff = HemicubeFormFactors(quads, ref, resolution=16)
+    ff = HemicubeFormFactors(quads, calls(ref), resolution=16)
     ff.rows([0, 15])
     data["materials"]["white"]["diffuse"] = [0.2, 0.3, 0.4]
     data["lights"][0]["radiance"] = [1, 1, 1]
@@ -167,13 +168,13 @@ def test11b_new_colours_reuse_every_row(ref):
 def test12_bad_arguments_are_refused(ref):
     q = truth.cube(1)
     with pytest.raises(KitError, match="even"):
-        HemicubeFormFactors(q, ref, resolution=31)
+        HemicubeFormFactors(q, calls(ref), resolution=31)
     with pytest.raises(KitError, match="proximity"):
-        HemicubeFormFactors(q, ref, proximity="magic")
+        HemicubeFormFactors(q, calls(ref), proximity="magic")
     with pytest.raises(KitError, match="out of range"):
-        HemicubeFormFactors(q, ref).row(6)
+        HemicubeFormFactors(q, calls(ref)).row(6)
     with pytest.raises(KitError, match=r"\(n, 4, 3\)"):
-        HemicubeFormFactors(np.zeros((3, 3)), ref)
+        HemicubeFormFactors(np.zeros((3, 3)), calls(ref))
 
 
 # --- ray casting, the comparison ---------------------------------------------------------------
@@ -193,7 +194,7 @@ def test14_hemicube_and_ray_casting_agree_on_the_cornell_box(ref):
     quads, _, _ = scene_polygons(load_scene("cornell-box"))
     quads, _ = subdivide_uniform(quads, 3)
     rows = [9, 11, 24, len(quads) - 5]   # ceiling and back-wall patches, the light: no occluder close to them
-    hemi = HemicubeFormFactors(quads, ref, resolution=128).rows(rows)
+    hemi = HemicubeFormFactors(quads, calls(ref), resolution=128).rows(rows)
     rays = formfactor_matrix_raycast(quads, 200_000, seed=3, rows=rows)
     sigma = np.sqrt(np.maximum(rays, 1e-3) / 200_000)
     assert hemi.sum(axis=1) == pytest.approx(rays.sum(axis=1), abs=0.01)
@@ -204,8 +205,8 @@ def test_rows_are_right_after_another_gl_context_is_made_current(ref):
     """A second context (a demo window, another engine) must not redirect the engine's draws and reads."""
     from cs451.gl import create_context
     quads, _, _ = scene_polygons(load_scene("cornell-box"))
-    alone = HemicubeFormFactors(quads, ref, resolution=64).row(2)
-    ff = HemicubeFormFactors(quads, ref, resolution=64, batch=1)
+    alone = HemicubeFormFactors(quads, calls(ref), resolution=64).row(2)
+    ff = HemicubeFormFactors(quads, calls(ref), resolution=64, batch=1)
     ff.row(0)                                              # its GL state exists
     other = create_context()
     fbo = other.simple_framebuffer((8, 8))
@@ -229,7 +230,7 @@ def test15_the_floor_sees_the_light_not_the_ceiling_behind_it(ref):
     behind = ceiling & (q[:, :, 0].min(1) >= 213) & (q[:, :, 0].max(1) <= 343) & (q[:, :, 2].min(1) >= 227) \
         & (q[:, :, 2].max(1) <= 332)
     assert behind.sum() == 4
-    ff = HemicubeFormFactors(patches, ref, resolution=64, proximity="none")
+    ff = HemicubeFormFactors(patches, calls(ref), resolution=64, proximity="none")
     rows = ff.rows(np.flatnonzero(parent == 0)[::7])
     open_view = rows.sum(axis=1) > 0.5                          # not under a block
     assert open_view.sum() >= 10
@@ -237,7 +238,7 @@ def test15_the_floor_sees_the_light_not_the_ceiling_behind_it(ref):
     sees_light = rows[open_view][:, light].sum(axis=1) > 0.002
     assert sees_light.mean() > 0.7                              # all but those in a block's shadow
     # the cause: with the near plane at 1e-5 of the diagonal the ceiling wins the depth test everywhere
-    tiny = HemicubeFormFactors(patches, ref, resolution=64, proximity="none", near=1e-5 * ff.far / 2)
+    tiny = HemicubeFormFactors(patches, calls(ref), resolution=64, proximity="none", near=1e-5 * ff.far / 2)
     old = tiny.rows(np.flatnonzero(parent == 0)[::7])
     assert old[:, light].sum() == 0.0 and old[:, behind].sum() > 0.05
 
@@ -245,13 +246,13 @@ def test15_the_floor_sees_the_light_not_the_ceiling_behind_it(ref):
 def test16_a_patch_blind_from_its_centre_shoots_from_the_part_that_sees(ref):
     """A floor patch whose centre lies under a block is lit on its exposed part; that part must shoot."""
     patches, parent = cornell_patches(140.0)
-    plain = HemicubeFormFactors(patches, ref, resolution=32, proximity="none")
+    plain = HemicubeFormFactors(patches, calls(ref), resolution=32, proximity="none")
     light_row = plain.row(int(np.flatnonzero(parent == 15)[0]))
     floor = np.flatnonzero(parent == 0)
     sums = plain.rows(floor).sum(axis=1)
     blind_but_lit = floor[(sums < 0.05) & (light_row[floor] > 0)]
     assert len(blind_but_lit), "the scene no longer has a lit floor patch with its centre under a block"
-    again = HemicubeFormFactors(patches, ref, resolution=32, proximity="none", resample_blind=3)
+    again = HemicubeFormFactors(patches, calls(ref), resolution=32, proximity="none", resample_blind=3)
     fixed = again.rows(blind_but_lit)
     assert (fixed.sum(axis=1) > 0.5).all()
     assert again.counters["blind_rows_resampled"] == len(blind_but_lit)
@@ -260,4 +261,4 @@ def test16_a_patch_blind_from_its_centre_shoots_from_the_part_that_sees(ref):
     open_front = np.flatnonzero(parent == 14)
     assert np.array_equal(again.rows(open_front), plain.rows(open_front))
     with pytest.raises(KitError, match="resample_blind"):
-        HemicubeFormFactors(patches, ref, resample_blind=-1)
+        HemicubeFormFactors(patches, calls(ref), resample_blind=-1)

@@ -14,6 +14,7 @@ from cs451.impl import load_impl, resolve_impl
 from cs451.patches import patch_normals, patch_triangles, scene_polygons
 from cs451.scene import BUNDLED_DIR, load_scene, parse_scene
 from cs451.stages import get_stage, stage_names
+from cs451.stages.hemicube import calls
 
 
 @pytest.fixture(scope="module")
@@ -56,7 +57,7 @@ def raycast_item_buffer(quads, views, resolution):
 @pytest.mark.parametrize("patch", [0, 2, 5, 12, 15])
 def test01_item_buffer_matches_ray_casting_through_cell_centres(ref, patch):
     quads, _, _ = scene_polygons(load_scene("cornell-box"))
-    ff = HemicubeFormFactors(quads, ref, resolution=64, rotate=True, seed=3)
+    ff = HemicubeFormFactors(quads, calls(ref), resolution=64, rotate=True, seed=3)
     views = ff.views_for(patch)
     top, sides = ff.renderer.render(views[None])[0]
     want = raycast_item_buffer(quads, views, 64)
@@ -138,4 +139,4 @@ def test10_wrong_shape_from_the_tables_is_one_line(make_submission):
     root = make_submission("hemicube", "tables.py", "    return top, side", "    return top, side.T")
     module = load_impl(resolve_impl(root, "hemicube"), "hemicube")
     with pytest.raises(KitError, match=r"H1 delta_form_factors\(\) side returned shape \(8, 4\), expected \(4, 8\)"):
-        HemicubeFormFactors(truth.cube(1), module, resolution=8).row(0)
+        HemicubeFormFactors(truth.cube(1), calls(module), resolution=8).row(0)

@@ -18,6 +18,7 @@ from cs451.patches import patch_areas
 from bench.meshes import subdivide_uniform
 from cs451.scene import load_scene
 from cs451.stages import radiosity as R
+from cs451.stages.hemicube import calls
 from test_radiosity import random_scene
 
 REF = load_impl(resolve_impl("reference", "radiosity"), "radiosity")
@@ -37,7 +38,7 @@ def test01_one_element_per_patch_is_plain_progressive_refinement():
 def test02_patch_centred_row_is_the_engines_own_row_at_that_place():
     patches = R.make_patches(load_scene("cornell-box"), REF, 140.0)
     for rotate in (False, True):
-        engine = HemicubeFormFactors(patches.quads, HEMICUBE, resolution=32, rotate=rotate, proximity="none")
+        engine = HemicubeFormFactors(patches.quads, calls(HEMICUBE), resolution=32, rotate=rotate, proximity="none")
         for i in (0, 40, 100):
             got = engine.rows_at(engine.centers[i], engine.normals[i], ids=[i])[0]
             assert np.array_equal(got, engine.row(i))
@@ -48,7 +49,7 @@ def furnace_elements():
     quads, _, _, _ = R.scene_polygons(load_scene("furnace"))
     patches, _ = subdivide_uniform(quads, 2)
     elements, parent = S.split_patches(patches, 2)
-    engine = HemicubeFormFactors(elements, HEMICUBE, resolution=32, proximity="none")
+    engine = HemicubeFormFactors(elements, calls(HEMICUBE), resolution=32, proximity="none")
     return patches, elements, parent, S.PatchToElementRows(engine, patches, parent)
 
 
@@ -74,7 +75,7 @@ def test04_cornell_box_substructured_approaches_the_element_solution_with_a_row_
     elements, parent = S.split_patches(patches.quads, 2)
     a = patch_areas(elements)
     rho, E = patches.reflectance[parent], patches.emission[parent]
-    engine = HemicubeFormFactors(elements, HEMICUBE, resolution=32, proximity="none")
+    engine = HemicubeFormFactors(elements, calls(HEMICUBE), resolution=32, proximity="none")
     rows = S.PatchToElementRows(engine, patches.quads, parent)
     sol = S.solve_substructured(rows, parent, a, rho, E, tolerance=1e-6)
     assert sol.converged

@@ -1,6 +1,6 @@
 """Stage 3, hemi-cube form factors: its interface, and the calls into a student's functions with checks.
 
-The form-factor engine (``cs451/formfactors.py``, which stage 4 also uses)
+The form-factor engine (``cs451/formfactors/``, which stage 4 also uses)
 renders hemicubes with the student's tables (H1), views (H2), projections (H3)
 and shaders (H4), sums rows with H5 and fixes close pairs with H6; it reaches
 them only through the wrappers here, so bad student output becomes a one-line
@@ -93,6 +93,38 @@ def call_contour(impl: Any, point: np.ndarray, normal: np.ndarray, polygon: np.n
     return value
 
 
+class _Calls:
+    """A stage-3 implementation as the form-factor engine asks for it (:class:`cs451.formfactors.StageCalls`),
+    every answer checked by the wrappers above."""
+
+    def __init__(self, impl: Any):
+        self.impl = impl
+
+    def tables(self, resolution: int) -> tuple[np.ndarray, np.ndarray]:
+        return call_tables(self.impl, resolution)
+
+    def views(self, center: np.ndarray, normal: np.ndarray, up: np.ndarray) -> np.ndarray:
+        return call_views(self.impl, center, normal, up)
+
+    def projections(self, near: float, far: float) -> np.ndarray:
+        return call_projections(self.impl, near, far)
+
+    def shaders(self) -> tuple[str, str]:
+        return call_shaders(self.impl)
+
+    def row(self, top_items: np.ndarray, side_items: np.ndarray, top_weights: np.ndarray, side_weights: np.ndarray,
+            n: int) -> np.ndarray:
+        return call_row(self.impl, top_items, side_items, top_weights, side_weights, n)
+
+    def contour(self, point: np.ndarray, normal: np.ndarray, polygon: np.ndarray) -> float:
+        return call_contour(self.impl, point, normal, polygon)
+
+
+def calls(impl: Any) -> Any:
+    """What the form-factor engine takes: ``HemicubeFormFactors(quads, calls(impl))``."""
+    return _Calls(impl)
+
+
 # --- rendering --------------------------------------------------------------
 
 def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, **_: Any) -> np.ndarray:
@@ -104,10 +136,10 @@ def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, **_: An
     if opts.patch >= len(quads):
         raise Context(scene.source or scene.name or "<scene>", "options.hemicube").child("patch").error(
             f"the scene has {len(quads)} patches (0 .. {len(quads) - 1}), got {opts.patch}")
-    ff = HemicubeFormFactors(quads, impl, resolution=opts.resolution, rotate=opts.rotate)
+    ff = HemicubeFormFactors(quads, calls(impl), resolution=opts.resolution, rotate=opts.rotate)
     if opts.view == "itembuffer":
         return item_buffer_image(ff, opts.patch, size)
-    image = formfactor_image(scene, quads, ff.row(opts.patch), impl, size)
+    image = formfactor_image(scene, quads, ff.row(opts.patch), ff.calls, size)
     print(f"patch {opts.patch}: {ff.summary()}", file=sys.stderr)   # row sums, reciprocity, closure: every run
     return image
 
@@ -147,7 +179,7 @@ def probe_rows(impl: Any, quads: list, rows: list[int], resolution: int = 128, r
                proximity: str = "none", seed: int = 0) -> dict[str, np.ndarray]:
     """Rows of the form-factor matrix of ``quads``, everything from the submission (H1-H5, and H6 if asked)."""
     from ..formfactors import HemicubeFormFactors
-    ff = HemicubeFormFactors(_quads(quads), impl, resolution=resolution, rotate=rotate, proximity=proximity, seed=seed)
+    ff = HemicubeFormFactors(_quads(quads), calls(impl), resolution=resolution, rotate=rotate, proximity=proximity, seed=seed)
     return {"rows": ff.rows(list(rows))}
 
 
@@ -161,14 +193,14 @@ def probe_scene_rows(impl: Any, scene: dict, rows: list[int], resolution: int = 
 def probe_item_buffer_parts(impl: Any, quads: list, patch: int, resolution: int) -> dict[str, np.ndarray]:
     """The trusted inputs of an item-buffer image test: the views and projections (from the reference)."""
     from ..formfactors import hemicube_inputs
-    views, projections, near, far = hemicube_inputs(_quads(quads), impl, patch)
+    views, projections, near, far = hemicube_inputs(_quads(quads), calls(impl), patch)
     return {"views": views, "projections": projections}
 
 
 def probe_item_buffer(impl: Any, quads: list, patch: int, resolution: int, **given: np.ndarray) -> dict[str, np.ndarray]:
     """The unfolded item buffer of one hemicube as an image, drawn with the submission's shaders (H4)."""
     from ..formfactors import HemicubeFormFactors, item_buffer_image
-    ff = HemicubeFormFactors(_quads(quads), impl, resolution=resolution, rotate=False, proximity="none")
+    ff = HemicubeFormFactors(_quads(quads), calls(impl), resolution=resolution, rotate=False, proximity="none")
     return {"image": item_buffer_image(ff, int(patch), None, given=given or None)}
 
 

@@ -251,9 +251,10 @@ def hemicube_formfactors(quads: np.ndarray, resolution: int = 128, proximity: st
     """
     from ..formfactors import HemicubeFormFactors
     from ..impl import earlier_stage_impl, load_impl
+    from . import hemicube as H
 
     impl = load_impl(earlier_stage_impl("hemicube"), "hemicube")
-    return HemicubeFormFactors(quads, impl, resolution=resolution, proximity=proximity, ctx=ctx,
+    return HemicubeFormFactors(quads, H.calls(impl), resolution=resolution, proximity=proximity, ctx=ctx,
                                batch=batch, seed=seed, resample_blind=RESAMPLE_BLIND)
 
 
