@@ -33,8 +33,9 @@ PY=${PYTHON:-python3}
 if [ ! -x .venv/bin/python ]; then
   "$PY" -m venv .venv
 fi
+echo "setup: installing the Python packages into .venv (a few minutes the first time; pip shows each one)"
 .venv/bin/python -m pip install -q --upgrade pip >/dev/null
-.venv/bin/python -m pip install -q -e .
+.venv/bin/python -m pip install --progress-bar off -e ".[dev,bench]"   # the kit, its tests and its benchmarks
 echo "setup: done; the kit's command is .venv/bin/cs451 (or activate: source .venv/bin/activate)"
 
 # The main job: render the course notes' lit sphere with the reference solution.

@@ -140,7 +140,8 @@ def _setup_script(stage: str) -> str:
         raise KitError("setup.sh: no '# The main job' section to replace")
     lines = text[:cut].splitlines(keepends=True)
     first_code = next(i for i, line in enumerate(lines) if i > 0 and not line.startswith("#"))
-    body = lines[first_code:]  # the kit's header comment talks of its main job
+    body = [line.replace('-e ".[dev,bench]"   # the kit, its tests and its benchmarks', "-e .   # the kit's engine")
+            for line in lines[first_code:]]  # the kit's header comment talks of its main job
     header = ["#!/usr/bin/env bash\n",
               "# One command for a fresh Debian/Ubuntu machine: installs what this repository needs.\n",
               "# Safe to run again; it skips what is already there.\n"]
