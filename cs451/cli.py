@@ -72,7 +72,7 @@ def _cmd_starter(a: argparse.Namespace) -> int:
 
 
 def _cmd_demo(a: argparse.Namespace) -> int:
-    from .demo import run_demo
+    from .demos import run_demo
     window = True if a.window else (False if a.no_window else None)
     from .copy import default_impl
     paths = run_demo(stage=a.stage, impl=a.impl or default_impl(), output=a.output, window=window, frames=a.frames)

@@ -295,8 +295,8 @@ def probe_render(impl: Any, scene: dict, size: list[int], shading: str | None = 
 
 
 def demo(module: Any, output: Path, window: bool, frames: int | None) -> list[Path]:
-    """The original program's window, or its images without a display (:mod:`cs451.demo`)."""
-    from ..demo import sphere_demo  # GLFW and the window loop load only for a demo
+    """The notes' window, or its images without a display (:mod:`cs451.stages._sphere_demo`)."""
+    from ._sphere_demo import demo as sphere_demo  # GLFW and the window loop load only for a demo
     return sphere_demo(module, output, window, frames)
 
 
