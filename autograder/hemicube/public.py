@@ -41,13 +41,13 @@ def tables_test(name, points, resolution) -> Test:
 
 def views_test(name, points, center, normal, up) -> Test:
     return Test(name, "H2", points, "views", {"center": center, "normal": normal, "up": up},
-                array_close("views", rtol=1e-9, atol=1e-12, what="the five view matrices"),
+                array_close("views", rtol=1e-9, atol=1e-12, what="the five view matrices", plural=True),
                 MATRIX_TOL, expected="none", truth=truth(truths.views), timeout=QUICK)
 
 
 def projections_test(name, points, near, far) -> Test:
     return Test(name, "H3", points, "projections", {"near": near, "far": far},
-                array_close("projections", rtol=1e-9, atol=1e-12, what="the two projections"),
+                array_close("projections", rtol=1e-9, atol=1e-12, what="the two projections", plural=True),
                 MATRIX_TOL, expected="none", truth=truth(truths.projections), timeout=QUICK)
 
 

@@ -169,7 +169,7 @@ def shadow_test(name, points, scene, origins, targets) -> Test:
 
 
 def reflect_test(name, points, **params) -> Test:
-    return Test(name, "W8", points, "reflect", params, array_close("r", rtol=0, atol=1e-9, what="the reflected directions"),
+    return Test(name, "W8", points, "reflect", params, array_close("r", rtol=0, atol=1e-9, what="the reflected directions", plural=True),
                 "within 1e-9", expected="none", truth=truth(truths.reflect), timeout=QUICK)
 
 

@@ -84,6 +84,12 @@ def student_call(stage: Stage, module: Any, task_id: str, *args: Any) -> Any:
         raise KitError(f"{task.id} {task.function}() is not implemented yet: {hint}") from None
 
 
+def shape_text(shape: tuple[int | None, ...]) -> str:
+    """A shape as Python writes it, with ``n`` for any length: ``(7,)``, ``(n, 3)``, ``(4, 4)``."""
+    inner = ", ".join("n" if s is None else str(s) for s in shape)
+    return f"({inner},)" if len(shape) == 1 else f"({inner})"
+
+
 def as_array(value: Any, shape: tuple[int | None, ...], what: str, kind: str = "f") -> np.ndarray:
     """Check a student's result: array-like, of this shape (None = any length), finite; else a KitError."""
     try:
@@ -91,8 +97,7 @@ def as_array(value: Any, shape: tuple[int | None, ...], what: str, kind: str = "
     except (TypeError, ValueError) as err:
         raise KitError(f"{what} returned something that is not an array ({type(value).__name__}: {err})") from None
     if arr.ndim != len(shape) or any(s is not None and s != a for s, a in zip(shape, arr.shape)):
-        want = "(" + ", ".join("n" if s is None else str(s) for s in shape) + ")"
-        raise KitError(f"{what} returned shape {arr.shape}, expected {want}")
+        raise KitError(f"{what} returned shape {arr.shape}, expected {shape_text(shape)}")
     if kind == "i":
         if arr.dtype.kind not in "iu":
             if arr.dtype.kind == "f" and np.isfinite(arr).all() and np.all(arr == np.round(arr)):

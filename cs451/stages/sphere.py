@@ -16,7 +16,7 @@ import numpy as np
 
 from .. import schema
 from ..errors import KitError
-from ..gl import create_context
+from ..gl import compile_program, create_context
 from ..scene import Camera, DirectionalLight, PointLight, Scene, Sphere, parse_scene
 from ..schema import Context, field
 from .base import Stage, Task, as_array, student_call
@@ -151,12 +151,8 @@ class SphereRenderer:
                  task: str = "S4"):
         self.ctx = ctx
         vs, fs = shaders
-        try:
-            self.program = ctx.program(vertex_shader=GLSL_INTERFACE + VERTEX_INPUTS + vs,
-                                       fragment_shader=GLSL_INTERFACE + FRAGMENT_OUTPUT + fs)
-        except Exception as err:  # moderngl reports compile and link errors as plain Exceptions
-            first = next((ln for ln in str(err).splitlines() if "error" in ln.lower()), str(err).strip().splitlines()[0])
-            raise KitError(f"{task}: shader does not compile: {first.strip()}") from None
+        self.program = compile_program(ctx, task, (GLSL_INTERFACE + VERTEX_INPUTS, vs, ""),
+                                       (GLSL_INTERFACE + FRAGMENT_OUTPUT, fs, ""))
         self.vaos = []
         for positions, normals, triangles in meshes:
             vbo = ctx.buffer(np.hstack([positions, normals]).astype("f4").tobytes())
