@@ -33,5 +33,5 @@ TESTS = [
     known_row_test("H6 proximity fix: a 1 × 0.5 floor and a 1 × 2 wall sharing an edge (Howell C-14)", "H6", 2,
                    [truths.square(0, 0, 0, 1, True)[:1] + [[0.5, 0, 0], [0.5, 1, 0], [0, 1, 0]],
                     [[0, 0, 0], [0, 1, 0], [0, 1, 2], [0, 0, 2]]],
-                   0, [[1]], [truths.howell_c14(1.0, 0.5, 2.0)], 0.003, proximity="contour"),
+                   0, [[1]], [truths.howell_c14(1.0, 0.5, 2.0)], 0.003),
 ]

@@ -72,24 +72,32 @@ def row_sum_test(name, points, resolution, n, seed) -> Test:
                 truth=truth(truths.row_from_items), timeout=QUICK)
 
 
-def known_row_test(name, task, points, quads, row, entries, want, rtol, resolution=128, proximity="none",
-                   what="F", rotate=False) -> Test:
-    """Row ``row`` of the form-factor matrix of ``quads``, summed over ``entries`` (lists of receivers), against ``want``."""
+#: Row tests judge one task each: H5 sums the reference's item buffers (its H1 to H4), H6 fixes the reference's rows.
+ROW_PROBE = {"H5": "rows_from_buffers", "H6": "proximity_rows"}
+
+
+def known_row_test(name, task, points, quads, row, entries, want, rtol, resolution=128, what="F", rotate=False) -> Test:
+    """Row ``row`` of the form-factor matrix of ``quads``, summed over ``entries`` (lists of receivers), against ``want``.
+
+    H5: the submission sums the trusted item buffers of the row's hemicube; H6: the submission's proximity
+    fix runs on the trusted hemicube row. Either way no other task of the submission runs.
+    """
     labels = what if isinstance(what, list) else [what] * len(entries)
-    return Test(name, task, points, "rows",
-                {"quads": quads, "rows": [row], "resolution": resolution, "rotate": rotate, "proximity": proximity},
+    return Test(name, task, points, ROW_PROBE[task],
+                {"quads": quads, "rows": [row], "resolution": resolution, "rotate": rotate},
                 all_of([("row", sub(checks.known_row, entries=entries, want=[float(w) for w in want], labels=labels,
                                     rtol=rtol))]),
-                f"within {rtol:.1%} of the closed form", expected="none", timeout=RENDER)
+                f"within {rtol:.1%} of the closed form", expected="none", given="hemicube_buffers", timeout=RENDER)
 
 
 def closure_test(name, points, k, resolution) -> Test:
     quads = truths.cube(k)
-    return Test(name, "H5", points, "rows",
+    return Test(name, "H5", points, ROW_PROBE["H5"],
                 {"quads": quads, "rows": list(range(len(quads))), "resolution": resolution, "rotate": True},
                 all_of([("closure", sub(checks.row_closure)), ("the reference's rows", sub(checks.rows_like_reference))],
                        earn_with=["the reference's rows"]),
-                "every row sums to 1 within 0.5%, entries within 0.002 of the reference's hemicubes", timeout=RENDER)
+                "every row sums to 1 within 0.5%, entries within 0.002 of the reference's hemicubes",
+                given="hemicube_buffers", timeout=RENDER)
 
 
 def contour_test(name, points, point, normal, polygon) -> Test:
@@ -118,7 +126,7 @@ TESTS = [
     closure_test("H5 row: a closed cube, 2 × 2 patches a face, rows sum to 1", 3, 2, 64),
     contour_test("H6 point to polygon: a unit square one above a point", 4, [0.5, 0.5, 0], [0, 0, 1], UNIT_SQUARE_ABOVE),
     known_row_test("H6 proximity fix: unit squares one apart (Howell C-11, F = 0.19982)", "H6", 3,
-                   truths.opposed_squares(1.0, 1.0), 0, [[1]], [truths.howell_c11(1, 1, 1)], 0.002, proximity="contour"),
+                   truths.opposed_squares(1.0, 1.0), 0, [[1]], [truths.howell_c11(1, 1, 1)], 0.002),
     known_row_test("H6 proximity fix: unit squares at right angles (Howell C-14, F = 0.20004)", "H6", 3,
-                   truths.perpendicular_squares(1.0, 1.0), 0, [[1]], [truths.howell_c14(1, 1, 1)], 0.002, proximity="contour"),
+                   truths.perpendicular_squares(1.0, 1.0), 0, [[1]], [truths.howell_c14(1, 1, 1)], 0.002),
 ]

@@ -5,8 +5,10 @@ R1 15, R2 15, R3 35, R4 10, R5 25 in all; hidden.py holds part of each task's po
 
 Scene tests get their patches and form factors from the reference run of the probe
 ``system`` (stage 3's trusted hemicube engine), so a bug in R1 or in stage 3 costs nothing
-elsewhere. R3's tests run the submission's own R2 inside its loop, and the image tests its
-R3, R4 and R5 (tests/test_radiosity_grading.py checks which tasks a broken function costs).
+elsewhere; the image tests also get the values the reference's R3 and R4 display
+(``solved_system``), so they judge R5 alone. R3's tests run the submission's own R2 inside
+its loop, and say so when they fail (tests/test_radiosity_grading.py checks which tasks a
+broken function costs).
 """
 from __future__ import annotations
 
@@ -105,20 +107,21 @@ def by_hand_test(name, points, system, max_shots, tolerance=0.0, overshoot=1.0) 
     params = {**system, "tolerance": tolerance, "max_shots": max_shots, "overshoot": overshoot}
     return Test(name, "R3", points, "progressive", params, check(checks.loop_matches),
                 "same shots in the same order; B, ΔB within 1e-8", expected="none", truth=truth(truths.shooting_loop),
-                timeout=SOLVE)
+                timeout=SOLVE, depends_on=("R2",))
 
 
 def furnace_test(name, points, albedo, tolerance, overshoot=1.0) -> Test:
     params = {**furnace_cube(albedo), "tolerance": tolerance, "max_shots": 100_000, "overshoot": overshoot}
     return Test(name, "R3", points, "progressive", params, check(checks.furnace_uniform, want=truths.furnace(1.0, albedo)),
-                "E/(1 − ρ) within twice the tolerance, in as many shots as the reference (± 25%)", timeout=SOLVE)
+                "E/(1 − ρ) within twice the tolerance, in as many shots as the reference (± 25%)", timeout=SOLVE,
+                depends_on=("R2",))
 
 
 def scene_solve_test(name, points, scene, patch_size, tolerance=1e-5, within=1e-3) -> Test:
     params = {"scene": scene, "patch_size": patch_size, "resolution": 32, "tolerance": tolerance, "max_shots": 200_000}
     return Test(name, "R3", points, "progressive", params, check(checks.converged_to_direct, within=within),
                 f"within {within:.1%} of the direct solve (sum of |differences|), in as many shots as the reference (± 25%)",
-                given="system", timeout=SOLVE)
+                given="system", timeout=SOLVE, depends_on=("R2",))
 
 
 def ambient_test(name, points, areas, reflectance, unshot) -> Test:
@@ -138,7 +141,7 @@ def vertex_test(name, points, quads, parent, radiosity) -> Test:
 
 def render_test(name, points, scene, size, patch_size) -> Test:
     params = {"scene": scene, "size": list(size), "patch_size": patch_size, "resolution": 32, "tolerance": 1e-3}
-    return Test(name, "R5", points, "render", params, image_matches(IMAGE), IMAGE.describe(), given="system",
+    return Test(name, "R5", points, "render", params, image_matches(IMAGE), IMAGE.describe(), given="solved_system",
                 timeout=RENDER)
 
 

@@ -72,7 +72,7 @@ def reshape_test(name, points, **params) -> Test:
     params.setdefault("camera", SPHERE_SCENE["camera"])
     return Test(name, "S6", points, "reshape", params, RESHAPE_CHECKS,
                 "viewport exact; aspect and field of view within 1e-6 relative", expected="none",
-                truth=truth(truths.reshape), timeout=QUICK)
+                truth=truth(truths.reshape), timeout=QUICK, depends_on=("S1",))
 
 
 def keys_test(name, points, presses) -> Test:

@@ -64,7 +64,7 @@ TESTS = [
     bvh_test("W4 build_bvh: the 55,296 triangles of the rippled torus", 3, scene=TORUS),
     hits_test("W5 closest_hit: 200 rays in Whitted's scene, 50 from inside the glass", 2, WHITTED,
               rays=WHITTED_RAYS),
-    hits_test("W5 closest_hit: the rippled torus through your hierarchy, 48×36", 3, TORUS, size=(48, 36)),
+    hits_test("W5 closest_hit: the rippled torus through the reference's hierarchy, 48×36", 3, TORUS, size=(48, 36)),
     shading_test("W6 local_shading: lights behind, grazing, shininess 0", 3,
                  normals=[[0, 0, 1]] * 4, to_eye=[[0, 0, 1]] * 4,
                  to_light=_unit([[0, 0, -1], [1, 0, 1e-9], [1, 0, 1], [0, 1, 1]]),

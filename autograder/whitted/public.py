@@ -130,13 +130,17 @@ def bvh_test(name, points, **params) -> Test:
                 "≤ 1.5× a median split's", expected="none", truth=truth(truths.hierarchy_boxes), timeout=HITS)
 
 
+#: W5's and W7's tests run the submission's own intersection functions inside its closest_hit and shadow rays.
+INTERSECT = ("W2", "W3")
+
+
 def depth_test(name, points, scene, size) -> Test:
     return Test(name, "W5", points, "closest_hit", {"scene": scene, "size": list(size)},
                 all_of([("primary visibility matches a rasteriser", sub(checks.depth_visibility)),
                         ("unit normals", sub(checks.depth_normals))],
                        require=["primary visibility matches a rasteriser"]),
                 "hit or miss and depth (5e-3 relative) within the range of pyrender's depth buffer over the pixel's central third, on ≥ 98% of pixels",
-                expected="none", given="primary_rays", truth=truth(truths.depth_range), timeout=HITS)
+                expected="none", given="hit_parts", truth=truth(truths.depth_range), timeout=HITS, depends_on=INTERSECT)
 
 
 def hits_test(name, points, scene, rays=None, size=None, hierarchy=None) -> Test:
@@ -149,7 +153,7 @@ def hits_test(name, points, scene, rays=None, size=None, hierarchy=None) -> Test
         params["hierarchy"] = hierarchy
     return Test(name, "W5", points, "closest_hit", params, check(checks.hits_match),
                 "same primitive as the reference on ≥ 99% of rays; t within 1e-6 relative; normals within 1e-6",
-                given=None if rays is not None else "primary_rays", timeout=HITS)
+                given="hit_parts", timeout=HITS, depends_on=INTERSECT)
 
 
 def shading_test(name, points, **params) -> Test:
@@ -165,7 +169,7 @@ def shadow_test(name, points, scene, origins, targets) -> Test:
                         ("shadow rays counted", sub(checks.shadow_counted))],
                        earn_with=["transmission through every surface crossed"]),
                 "within 1e-9 of a brute-force walk over the objects", expected="none",
-                truth=truth(truths.transmission), timeout=HITS)
+                truth=truth(truths.transmission), timeout=HITS, depends_on=INTERSECT)
 
 
 def reflect_test(name, points, **params) -> Test:
@@ -188,9 +192,14 @@ def fresnel_test(name, points, **params) -> Test:
                 truth=truth(truths.fresnel), timeout=QUICK)
 
 
+#: What a W11 test runs of the submission besides its trace: the camera rays, the hierarchy and the answers of
+#: reflect, refract and fresnel are the reference's (``trace_parts``), closest_hit, local_shading and shadow rays are not.
+TRACE_USES = ("W5", "W6", "W7")
+
+
 def image_test(name, points, scene, size) -> Test:
     return Test(name, "W11", points, "render", {"scene": scene, "size": list(size)}, image_matches(IMAGE),
-                IMAGE.describe(), given="primary_rays", timeout=RENDER)
+                IMAGE.describe(), given="trace_parts", timeout=RENDER, depends_on=TRACE_USES)
 
 
 def counter_test(name, points, scene, size, expect: dict) -> Test:
@@ -203,7 +212,8 @@ def counter_test(name, points, scene, size, expect: dict) -> Test:
         kw = {"at_least_one": True} if want == "some" else {"per_pixel": want}
         parts.append((f"{key} rays", sub(checks.counter, key=key, **kw)))
     return Test(name, "W11", points, "render", {"scene": scene, "size": list(size)}, all_of(parts, require=["the image"]),
-                "exact counts, beside an image within the image tolerance", given="primary_rays", timeout=RENDER)
+                "exact counts, beside an image within the image tolerance", given="trace_parts", timeout=RENDER,
+                depends_on=TRACE_USES)
 
 
 RNG = np.random.default_rng(12345)

@@ -315,11 +315,11 @@ def _name_failing_dependencies(stage: str, results: list[TestResult]) -> list[Te
             names = [f"{d} {spec.task(d).function}()" for d in deps]
             failing = [n for d, n in zip(deps, names) if d in losing]
             if failing:
-                note = (f"; this test runs your own {_and(names)}, and {_and(failing)} "
+                note = (f"; this test relies on your own {_and(names)}, and {_and(failing)} "
                         f"{'loses' if len(failing) == 1 else 'lose'} points in {'its' if len(failing) == 1 else 'their'} "
                         f"own tests: fix {'that' if len(failing) == 1 else 'those'} first")
             else:
-                note = f"; this test also runs your own {_and(names)}"
+                note = f"; this test relies on your own {_and(names)}"
             r = TestResult(r.test, r.score, replace(r.verdict, message=r.verdict.message + note), r.output, r.seconds)
         out.append(r)
     return out
