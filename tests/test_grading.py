@@ -51,6 +51,10 @@ def test03_starter_scores_zero_with_a_message_per_test():
     ("mesh.py", "phi = -2.0 * np.pi", "phi = 2.0 * np.pi", "S3"),                # mesh wound clockwise
     ("shaders.py", "v_color = fixed_function_lighting(p.xyz / p.w, n);", "v_color = fixed_function_lighting(p.xyz / p.w, -n);", "S4"),
     ("controls.py", 'if key in ("q", "Q", "escape"):', 'if key == "q":', "S7"),
+    # Phong without renormalising the interpolated normal (handout §S5): the coarse, close-up sphere tells
+    ("shaders.py", "fixed_function_lighting(v_position, normalize(v_normal))", "fixed_function_lighting(v_position, v_normal)",
+     "S5"),
+    ("camera.py", "f = 1.0 / np.tan(np.radians(fovy) / 2.0)", "f = 1.0 / np.tan(np.radians(fovy))", "S1"),  # S6 relies on S1
 ])
 def test04_one_broken_function_loses_only_its_task(make_submission, reference_grade, file, old, new, task):
     result = grade("sphere", make_submission("sphere", file, old, new), show_progress=False)

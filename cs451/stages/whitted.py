@@ -8,8 +8,6 @@ Everything a student writes is called through :data:`STAGE`, and checked.
 from __future__ import annotations
 
 import math
-import sys
-from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -19,7 +17,7 @@ from .. import raytrace, schema
 from ..errors import KitError
 from ..scene import Camera, Scene, parse_scene
 from ..schema import Context, field
-from .base import Stage, Task, as_array, student_call
+from .base import Stage, Task, as_array, functions_replaced, student_call
 
 TASKS = (
     Task("W1", "camera_rays", "Camera rays", ("camera", "width", "height")),
@@ -202,28 +200,6 @@ def _answers_from(given: dict[str, np.ndarray]) -> dict[str, _Answers]:
     return out
 
 
-@contextmanager
-def _functions_replaced(impl: Any, wrappers: dict[str, Callable[[Any], Any]]):
-    """Within the block, each task's function (``wrappers``: task -> wrap(own) -> replacement) is replaced in every
-    module of the submission's package that holds it, under whatever name: its trace calls the replacement."""
-    own = {task: getattr(impl, STAGE.task(task).function, None) for task in wrappers}
-    changed = []
-    prefix = impl.__name__
-    for name, module in list(sys.modules.items()):
-        if module is None or not (name == prefix or name.startswith(prefix + ".")):
-            continue
-        for attr, value in list(vars(module).items()):
-            for task, fn in own.items():
-                if fn is not None and value is fn:
-                    setattr(module, attr, wrappers[task](fn))
-                    changed.append((module, attr, value))
-    try:
-        yield
-    finally:
-        for module, attr, value in changed:
-            setattr(module, attr, value)
-
-
 def _recorder(task: str, log: dict[str, list]) -> Callable[[Any], Any]:
     def wrap(own: Any) -> Any:
         def recording(*args: Any) -> Any:
@@ -327,7 +303,7 @@ def probe_trace_parts(impl: Any, scene: dict, size: list[int], **opts: Any) -> d
     query the reference's trace put to reflect, refract and fresnel on this scene, with its answers."""
     out = probe_hit_parts(impl, scene, size, **opts)
     log: dict[str, list] = {task: [] for task in OPTICS}
-    with _functions_replaced(impl, {task: _recorder(task, log) for task in OPTICS}):
+    with functions_replaced(STAGE, impl, {task: _recorder(task, log) for task in OPTICS}):
         probe_render(impl, scene, size, **opts, **out)
     for task, (queries, results) in OPTICS.items():
         query_names, result_names = _answer_names(task)
@@ -407,7 +383,7 @@ def probe_render(impl: Any, scene: dict, size: list[int], origins: np.ndarray | 
     if origins is None or directions is None:
         origins, directions = _camera_rays(impl, sc.camera, width, height)
     answers = _answers_from(given)
-    with _functions_replaced(impl, {task: a.wrap for task, a in answers.items()}):
+    with functions_replaced(STAGE, impl, {task: a.wrap for task, a in answers.items()}):
         colours = as_array(student_call(STAGE, impl, "W11", ts, origins, directions), (len(origins), 3), "W11 trace()")
     out = {"image": colours.reshape(height, width, 3)}
     out.update({k: np.array(v) for k, v in ts.counters.items()})
