@@ -2,6 +2,8 @@
 
 Points per task (the rubric in assignments/04-radiosity/README.md):
 R1 15, R2 15, R3 35, R4 10, R5 25 in all; hidden.py holds part of each task's points.
+Every case a hidden test checks (max_edge 0, overshooting, a triangle's repeated corner) has a
+public test too.
 
 Scene tests get their patches and form factors from the reference run of the probe
 ``system`` (stage 3's trusted hemicube engine), so a bug in R1 or in stage 3 costs nothing
@@ -154,20 +156,38 @@ def _grid_patches() -> tuple[list, list, list]:
 
 GRID = _grid_patches()
 
+
+def _triangle_beside_quad() -> tuple[list, list, list]:
+    """A triangle (its last corner repeated) cut into patches beside a quad: a repeated corner is one vertex."""
+    polygons = np.array([[[0, 0, 0], [1.5, 0, 0], [0, 1.5, 0], [0, 1.5, 0]], [[1.5, 0, 0], [1.5, 1.5, 0], [0, 1.5, 0],
+                                                                           [0, 1.5, 0]]], float)
+    patches, parent = truths.subdivide_by_hand(polygons, 0.8)
+    return lists(patches), parent.tolist(), lists(np.random.default_rng(8).uniform(0, 1, (len(patches), 3)))
+
+
+#: The hand-worked scene after its first shot with overshooting ω = 1.5: patch 0 keeps ΔB = (1 − ω)·E, negative.
+OVERSHOT = [[-5.0, -2.5, -1.0], [4.5, 1.8, 0.54], [2.4, 0.3, 0.36]]
+
 TESTS = [
     subdivide_test("R1 subdivide: the Cornell box at 100 mm", 6, scene_quads("cornell-box"), 100.0),
     subdivide_test("R1 subdivide: a triangle and a quad", 4,
                    [[[0, 0, 0], [4, 0, 0], [0, 3, 0], [0, 3, 0]], [[0, 0, 1], [2, 0, 1], [2, 0.5, 1], [0, 1, 1]]], 1.0),
+    subdivide_test("R1 subdivide: max_edge 0 keeps the quads", 1, scene_quads("furnace"), 0.0),
     shoot_test("R2 shoot: the hand-worked emitter shoots", 5, HAND, 0),
     shoot_test("R2 shoot: a receiver shoots back, B and ΔB already set", 5, HAND, 1,
                radiosity=[[10.0, 5.0, 2.0], [3.0, 1.2, 0.36], [1.6, 0.2, 0.24]],
                unshot=[[0.0, 0.0, 0.0], [3.0, 1.2, 0.36], [1.6, 0.2, 0.24]]),
     by_hand_test("R3 progressive_refinement: the hand-worked scene, 4 shots (patch 1 shoots twice)", 6, HAND, 4),
     by_hand_test("R3 progressive_refinement: the hand-worked scene to 1e-6", 5, HAND, 10_000, tolerance=1e-6),
+    by_hand_test("R3 progressive_refinement: the hand-worked scene overshooting (ω = 1.5), 6 shots", 3, HAND, 6,
+                 overshoot=1.5),
     furnace_test("R3 progressive_refinement: the furnace, ρ = 0.9", 6, 0.9, 1e-4),
     scene_solve_test("R3 progressive_refinement: the Cornell box converges to the direct solve", 8, CORNELL, 140.0),
     ambient_test("R4 ambient_term: the hand-worked scene after one shot", 6, HAND["areas"], HAND["reflectance"],
                  [[0.0, 0.0, 0.0], [3.0, 1.2, 0.36], [1.6, 0.2, 0.24]]),
+    ambient_test("R4 ambient_term: after an overshot shot (a negative ΔB counts with its sign)", 2, HAND["areas"],
+                 HAND["reflectance"], OVERSHOT),
     vertex_test("R5 vertex_colors: three walls of the furnace, 3 × 3 patches each", 6, *GRID),
+    vertex_test("R5 vertex_colors: a triangle (repeated corner) beside a quad", 2, *_triangle_beside_quad()),
     render_test("R5 render: the Cornell box", 8, CORNELL, (128, 128), 100.0),
 ]

@@ -324,7 +324,10 @@ def solve_progressive(impl: Any, rows: Any, areas: np.ndarray, reflectance: np.n
     order = [int(i) for i in as_array(np.asarray(list(out[2])).reshape(-1), (None,), "R3 progressive_refinement() order", kind="i")]
     emitted = energy(emission, areas)
     residual = energy(unshot, areas) / emitted if emitted > 0 else 0.0
-    display = radiosity + reflectance * call_ambient(impl, areas, reflectance, unshot) if use_ambient else radiosity
+    # with every patch reflecting all of a colour, ρ_avg = 1 and R = 1/(1 − ρ_avg) is infinite: show B alone
+    ambient_defined = not np.all(reflectance >= 1.0, axis=0).any()
+    display = (radiosity + reflectance * call_ambient(impl, areas, reflectance, unshot)
+               if use_ambient and ambient_defined else radiosity)
     counters = dict(getattr(rows, "counters", {}))
     counters.update(patches=n, shots=len(order), distinct_shooters=len(set(order)), rows_requested=len(fetched),
                     patches_never_shot=n - len(set(order)),
