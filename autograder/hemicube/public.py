@@ -2,8 +2,8 @@
 
 Points per task (the rubric in assignments/03-hemicube/README.md):
 H1 15, H2 15, H3 10, H4 20, H5 25, H6 15; hidden.py holds part of each task's points.
-Every case a hidden test checks (a rotated up vector, patches no cell sees, a repeated
-corner) has a public test too.
+Every case a hidden test checks (a rotated up vector, a back face, patches no cell sees, a
+repeated corner) has a public test too.
 Tables, views and projections are checked against the formulas they are defined by
 (truths.py); rows against closed-form form factors (Howell C-11, C-14, the coaxial
 disk) and a closed cube; the item buffer against the reference's image, drawn
@@ -119,6 +119,11 @@ _turn = np.radians(35.0)
 ROTATED_WALL = dict(center=[0.0, 1.5, 2.0], normal=[0.0, -1.0, 0.0],
                     up=[float(np.cos(_turn)), 0.0, float(np.sin(_turn))])
 
+#: A small square above the shooter turned away from it (its back faces down), under a large one facing down:
+#: the back face must hide the large square behind it and receive nothing.
+BACK_FACE = [truths.square(0, 0, 0, 1, True), truths.square(0.2, 0.2, 0.5, 0.6, True),
+             truths.square(-1, -1, 1.5, 3, False)]
+
 #: A triangle stored as a quad: its last corner repeats the third (an edge of zero length).
 TRIANGLE_AS_QUAD = [[-0.3, 0.2, 1.2], [0.8, -0.1, 0.9], [0.1, 0.7, 1.6], [0.1, 0.7, 1.6]]
 
@@ -129,8 +134,9 @@ TESTS = [
     views_test("H2 views: a wall patch in the Cornell box", 4, [556, 274.4, 279.6], [-1, 0, 0], [0, 0, 1]),
     views_test("H2 views: a hemicube turned 35° about its normal (up not an axis)", 3, **ROTATED_WALL),
     projections_test("H3 projections: near 0.01, far 100", 5, 0.01, 100),
-    item_buffer_test("H4 item buffer: the Cornell box from the floor, resolution 64", 8, CORNELL_QUADS, 0, 64),
-    item_buffer_test("H4 item buffer: the Cornell box from the short block's top, resolution 128", 6, CORNELL_QUADS, 5, 128),
+    item_buffer_test("H4 item buffer: the Cornell box from the floor, resolution 64", 6, CORNELL_QUADS, 0, 64),
+    item_buffer_test("H4 item buffer: the Cornell box from the short block's top, resolution 128", 5, CORNELL_QUADS, 5, 128),
+    item_buffer_test("H4 item buffer: a patch seen from behind hides the one behind it, resolution 64", 3, BACK_FACE, 0, 64),
     row_sum_test("H5 row: random item buffers, resolution 16, 7 patches", 4, 16, 7, 1),
     row_sum_test("H5 row: random item buffers, resolution 4, 60 patches (the last 10 never seen)", 2, 4, 60, 4,
                  unseen=10),
