@@ -204,10 +204,15 @@ def _points_by_task(result):
     ("camera.py", "y = (1.0 - 2.0 * (np.arange(height) + 0.5) / height) * tan_y",
      "y = (2.0 * (np.arange(height) + 0.5) / height - 1.0) * tan_y", "W1", set()),           # rows from the bottom
     ("optics.py", "t = eta[:, None] * d + (eta * cos_i - cos_t)[:, None] * n",
-     "t = eta[:, None] * d - (eta * cos_i - cos_t)[:, None] * n", "W9", {"W11"}),             # bent the wrong way
+     "t = eta[:, None] * d - (eta * cos_i - cos_t)[:, None] * n", "W9", set()),               # bent the wrong way
+    ("optics.py", "return d - 2.0 * np.einsum(", "return d + 2.0 * np.einsum(", "W8", set()),  # the sign of reflect
+    ("optics.py", "rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)", "rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)",
+     "W10", set()),                                                                           # r_s written as r_p
+    ("bvh.py", "return median_bvh(lo, hi, LEAF_SIZE)", "return median_bvh(lo, hi, 16)", "W4", set()),  # leaves of 16
 ])
 def test15_one_broken_function_loses_its_task_only(make_submission, file, old, new, task, also):
-    """Every test but the image tests feeds trusted inputs, so a bug costs its own task (and W11's images)."""
+    """Tests of later tasks get the reference's parts (camera rays, hierarchy, reflect/refract/fresnel answers
+    for W11), so a bug costs its own task only."""
     from cs451.grading.runner import grade
     result = grade("whitted", make_submission("whitted", file, old, new), show_progress=False)
     got = _points_by_task(result)
