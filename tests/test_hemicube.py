@@ -142,3 +142,15 @@ def test10_wrong_shape_from_the_tables_is_one_line(make_submission):
     module = load_impl(resolve_impl(root, "hemicube"), "hemicube")
     with pytest.raises(KitError, match=r"H1 delta_form_factors\(\) side returned shape \(8, 4\), expected \(4, 8\)"):
         HemicubeFormFactors(truth.cube(1), module, resolution=8).row(0)
+
+
+@pytest.mark.parametrize("file, old, new, message", [
+    ("itembuffer.py", "v_id + 1u : 0u", "v_id + 1 : 0u",
+     r"^H4: the fragment shader does not compile: line 4, column \d+: error: "),      # int + uint
+    ("itembuffer.py", "void main() {\n    gl_Position", "void mane() {\n    gl_Position",
+     r"^H4: the vertex shader does not compile: in the kit's code after your source \(is main\(\) there\?\)"),
+])
+def test11_shader_errors_name_the_shader_and_count_the_students_own_lines(make_submission, file, old, new, message):
+    module = load_impl(resolve_impl(make_submission("hemicube", file, old, new), "hemicube"), "hemicube")
+    with pytest.raises(KitError, match=message):
+        HemicubeFormFactors(truth.cube(1), module, resolution=8).row(0)
