@@ -223,3 +223,19 @@ def test15_one_broken_function_loses_its_task_only(make_submission, file, old, n
     assert got[task] < full[task]
     assert {k: v for k, v in got.items() if k != task and k not in also} == \
         {k: v for k, v in full.items() if k != task and k not in also}
+
+
+def test16_trace_tests_answer_reflect_with_the_references_answers(make_submission, ref):
+    """W11's trusted parts: a reflect with the wrong sign is answered by the reference where the reference's own
+    trace asked, so the image and the counters are the reference's; without them they are not."""
+    from autograder.whitted.public import two_mirrors
+    broken = load_impl(resolve_impl(make_submission("whitted", "optics.py", "return d - 2.0 * np.einsum(",
+                                                    "return d + 2.0 * np.einsum("), "whitted"), "whitted")
+    for scene, size in ((scene_dict("whitted"), [24, 18]), (two_mirrors(0.5, 0.1, 10), [8, 6])):
+        parts = whitted.probe_trace_parts(ref, scene, size)
+        want = whitted.probe_render(ref, scene, size, **parts)
+        got = whitted.probe_render(broken, scene, size, **parts)
+        assert np.array_equal(got["image"], want["image"]) and got["reflection"] == want["reflection"] > 0
+        alone = whitted.probe_render(broken, scene, size, origins=parts["origins"], directions=parts["directions"])
+        assert alone["reflection"] != want["reflection"]
+    assert np.array_equal(broken.reflect(np.array([[0.0, 0.0, -1.0]]), np.array([[0.0, 0.0, 1.0]])), [[0.0, 0.0, -3.0]])

@@ -137,13 +137,20 @@ def _given_bvh(given: dict[str, np.ndarray]) -> dict[str, np.ndarray] | None:
 
 
 def _query(task: str, args: tuple) -> tuple[np.ndarray, list[np.ndarray]]:
-    """One row per ray of what an optics call asks, as floats (the key), and the arguments broadcast per ray."""
+    """One row per ray of what an optics call asks, as floats (the key), and the arguments broadcast per ray.
+
+    Raises ValueError for a call that is not a batch of rays as the interface has it ((n,) or (n, 3) arrays).
+    """
     if task == "W10":
-        cos = np.asarray(args[0], dtype=np.float64).reshape(-1)
+        cos = np.asarray(args[0], dtype=np.float64)
+        if cos.ndim != 1:
+            raise ValueError("not a batch")
         eta = np.broadcast_to(np.asarray(args[1], dtype=np.float64), cos.shape)
         return np.column_stack([cos, eta]), [cos, eta]
-    d = np.asarray(args[0], dtype=np.float64).reshape(-1, 3)
-    n = np.asarray(args[1], dtype=np.float64).reshape(-1, 3)
+    d = np.asarray(args[0], dtype=np.float64)
+    n = np.asarray(args[1], dtype=np.float64)
+    if d.ndim != 2 or d.shape[1:] != (3,) or n.shape != d.shape:
+        raise ValueError("not a batch")
     if task == "W8":  # the mirror direction is the same about -n: key the normal facing the ray
         facing = np.where((np.einsum("ij,ij->i", d, n) > 0)[:, None], -n, n)
         return np.column_stack([d, facing]), [d, n]
@@ -166,7 +173,7 @@ class _Answers:
         def answered(*args: Any) -> Any:
             try:
                 query, per_ray = _query(self.task, args)
-            except (TypeError, ValueError):
+            except (TypeError, ValueError, IndexError):
                 return own(*args)               # not a batch of rays: the submission's own answer
             found = np.array([self.index.get(k, -1) for k in _keys(query)], dtype=np.int64)
             missing = found < 0
