@@ -8,6 +8,7 @@ rasteriser give the same grades (README, "Tolerances").
 from __future__ import annotations
 
 import os
+import re
 import sys
 from typing import Any
 
@@ -71,3 +72,38 @@ def make_current(ctx: Any) -> None:
     EGL: leaving the block makes *no* context current.
     """
     ctx.__enter__()
+
+
+_GLSL_LOCATION = re.compile(r"\b0:(\d+)\((\d+)\):\s*")
+
+
+def _student_line(message: str, prefix: str, source: str) -> str:
+    """A GLSL compiler message with its ``0:LINE(COL)`` counted in the student's own source (the kit's lines taken off)."""
+    first, lines = prefix.count("\n"), source.count("\n") + 1
+
+    def where(m: re.Match) -> str:
+        line = int(m.group(1)) - first
+        if line < 1:
+            return "in the kit's interface before your source: "
+        if line > lines:
+            return "in the kit's code after your source (is main() there?): "
+        return f"line {line}, column {m.group(2)}: "
+    return _GLSL_LOCATION.sub(where, message, count=1)
+
+
+def compile_program(ctx: Any, task: str, vertex: tuple[str, str, str], fragment: tuple[str, str, str]) -> Any:
+    """``ctx.program`` of two shaders, each given as (the kit's prefix, the student's source, the kit's suffix).
+
+    A compile error becomes a one-line KitError that names the shader and gives the line in the
+    student's own source, the kit's prepended lines taken off; a link error says the two do not link.
+    """
+    try:
+        return ctx.program(vertex_shader="".join(vertex), fragment_shader="".join(fragment))
+    except Exception as err:  # moderngl reports compile and link errors as plain Exceptions
+        text = str(err).strip()
+        lines = text.splitlines() or ["unknown error"]
+        first = next((ln.strip() for ln in lines if "error" in ln.lower() and "failed" not in ln.lower()), lines[0].strip())
+        for name, (prefix, source, _) in (("vertex", vertex), ("fragment", fragment)):
+            if f"{name}_shader" in text:
+                raise KitError(f"{task}: the {name} shader does not compile: {_student_line(first, prefix, source)}") from None
+        raise KitError(f"{task}: the vertex and fragment shaders do not link: {first}") from None

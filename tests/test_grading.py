@@ -51,6 +51,10 @@ def test03_starter_scores_zero_with_a_message_per_test():
     ("mesh.py", "phi = -2.0 * np.pi", "phi = 2.0 * np.pi", "S3"),                # mesh wound clockwise
     ("shaders.py", "v_color = fixed_function_lighting(p.xyz / p.w, n);", "v_color = fixed_function_lighting(p.xyz / p.w, -n);", "S4"),
     ("controls.py", 'if key in ("q", "Q", "escape"):', 'if key == "q":', "S7"),
+    # Phong without renormalising the interpolated normal (handout §S5): the coarse, close-up sphere tells
+    ("shaders.py", "fixed_function_lighting(v_position, normalize(v_normal))", "fixed_function_lighting(v_position, v_normal)",
+     "S5"),
+    ("camera.py", "f = 1.0 / np.tan(np.radians(fovy) / 2.0)", "f = 1.0 / np.tan(np.radians(fovy))", "S1"),  # S6 relies on S1
 ])
 def test04_one_broken_function_loses_only_its_task(make_submission, reference_grade, file, old, new, task):
     result = grade("sphere", make_submission("sphere", file, old, new), show_progress=False)
@@ -99,3 +103,44 @@ def test08_only_the_word_reference_is_trusted_and_grading_leaves_the_kit_as_it_w
     assert "trusted" in trusted.isolation and "trusted" not in by_path.isolation
     assert trusted.score == by_path.score == trusted.max_score == 10
     assert modes == {p: p.stat().st_mode for p in modes}
+
+
+def test09_messages_write_shapes_as_python_does_and_plurals_agree():
+    import numpy as np
+
+    from cs451.errors import KitError
+    from cs451.grading.checks import ShapeError, close_to, output
+    from cs451.stages.base import as_array
+    with pytest.raises(KitError, match=r"returned shape \(8,\), expected \(7,\)$"):
+        as_array(np.zeros(8), (7,), "S0 f()")
+    with pytest.raises(ShapeError, match=r"has shape \(2, 3\), expected \(n, 4\)$"):
+        output({"x": np.zeros((2, 3))}, "x", (None, 4))
+    views = {"value": np.stack([np.eye(4)] * 5)}
+    plural = dict(key="views", what="the five view matrices", plural=True)
+    assert close_to({"views": views["value"]}, views, {}, **plural).message == "the five view matrices match"
+    assert close_to({"views": 2 * views["value"]}, views, {}, **plural).message.startswith("the five view matrices are wrong")
+    assert close_to({"m": np.eye(4)}, {"value": np.eye(4)}, {}, "m", what="the matrix").message == "the matrix matches"
+
+
+def test10_shader_errors_name_the_shader_and_count_the_students_own_lines():
+    from cs451.errors import KitError
+    from cs451.gl import create_context
+    from cs451.impl import load_impl, resolve_impl
+    from cs451.stages.sphere import SphereRenderer
+
+    vertex, fragment = load_impl(resolve_impl("reference", "sphere"), "sphere").phong_shaders()
+    ctx = create_context()
+
+    def line_of(source: str, text: str) -> int:
+        return next(i for i, line in enumerate(source.split("\n"), 1) if text in line)
+
+    broken = vertex.replace("gl_Position = u_projection * p;", "gl_Position = u_projection * p")
+    with pytest.raises(KitError, match=rf"^S5: the vertex shader does not compile: line {line_of(vertex, 'gl_Position') + 1}, "):
+        SphereRenderer(ctx, (broken, fragment), [], "S5")
+    broken = fragment.replace("normalize(v_normal)", "normalise(v_normal)")
+    with pytest.raises(KitError, match=rf"^S5: the fragment shader does not compile: line {line_of(fragment, 'normalize(v_normal)')}, "):
+        SphereRenderer(ctx, (vertex, broken), [], "S5")
+    with pytest.raises(KitError, match=r"^S5: the vertex shader does not compile: line 1, column 1: preprocessor error"):
+        SphereRenderer(ctx, ("#version 330\n" + vertex, fragment), [], "S5")
+    with pytest.raises(KitError, match=r"^S5: the vertex and fragment shaders do not link"):
+        SphereRenderer(ctx, (vertex, fragment.replace("void main()", "void mane()")), [], "S5")

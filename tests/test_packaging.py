@@ -19,11 +19,16 @@ from pathlib import Path
 import pytest
 
 from cs451 import KIT_ROOT
+from cs451.grading.loader import load_tests
 from cs451.packaging.release import build_release
 
 from conftest import world_readable_dir
 
 STAGE = "sphere"
+TESTS = load_tests(STAGE)
+HIDDEN = [t for t in TESTS if t.hidden]
+PUBLIC_POINTS = sum(t.points for t in TESTS if not t.hidden)
+HIDDEN_NOTE = f"{len(HIDDEN)} hidden tests ({sum(t.points for t in HIDDEN):g} points)"   # as the report counts them
 
 
 def run_autograder(layout: tuple[Path, dict], files: Path | None, *args: str) -> dict:
@@ -59,10 +64,10 @@ def test01_setup_moves_the_kit_out_of_reach_and_leaves_source_empty(gradescope):
 def test02_reference_upload_gets_full_marks_with_gradescope_fields(gradescope):
     results = run_autograder(gradescope, KIT_ROOT / "reference")  # an upload holding the sphere/ folder
     assert results["score"] == pytest.approx(100)
-    assert results["output_format"] == "html" and "9 hidden tests (40 points)" in results["output"]
+    assert results["output_format"] == "html" and HIDDEN_NOTE in results["output"]
     assert "bubblewrap" in results["output"] or "throwaway user" in results["output"]
     hidden = [t for t in results["tests"] if t["visibility"] == "after_published"]
-    assert len(hidden) == 9 and all(t["status"] == "passed" for t in results["tests"])
+    assert len(hidden) == len(HIDDEN) and all(t["status"] == "passed" for t in results["tests"])
     assert {"score", "max_score", "name", "number", "output", "tags"} <= set(results["tests"][0])
 
 
@@ -72,7 +77,7 @@ def test03_starter_files_uploaded_loose_get_zero_with_hints(gradescope):
         shutil.copy(f, loose / f.name)  # a student who dragged the files, not the folder
     results = run_autograder(gradescope, loose)
     shutil.rmtree(loose)
-    assert results["score"] == 0 and len(results["tests"]) == 21
+    assert results["score"] == 0 and len(results["tests"]) == len(TESTS)
     assert all("not implemented yet" in t["output"] for t in results["tests"])
 
 
@@ -101,7 +106,7 @@ def test04b_a_submission_cannot_write_the_results(gradescope):
     shutil.rmtree(upload)
     s1 = [t for t in results["tests"] if t["tags"] == ["S1"]]
     assert all(t["score"] == 0 and ("Permission denied" in t["output"] or "No such file" in t["output"]) for t in s1)
-    assert len(results["tests"]) == 21 and results["score"] == pytest.approx(sum(t["score"] for t in results["tests"]))
+    assert len(results["tests"]) == len(TESTS) and results["score"] == pytest.approx(sum(t["score"] for t in results["tests"]))
     assert all(t["status"] == "passed" for t in results["tests"] if t["tags"][0] in ("S2", "S3", "S4", "S5", "S7"))
 
 
@@ -119,11 +124,11 @@ def test05_student_repository_holds_no_solution_no_hidden_test_and_no_truth(rele
     assert spec == {f"autograder/{STAGE}/{n}" for n in ("__init__.py", "checks.py", "public.json", "hidden.json")}
     assert f"{STAGE}/camera.py" in files and ".github/workflows/classroom.yml" in files
     assert (release / STAGE / "camera.py").read_text() == (KIT_ROOT / "starter" / STAGE / "camera.py").read_text()
-    assert json.loads((release / "autograder" / STAGE / "hidden.json").read_text())["count"] == 9
+    assert json.loads((release / "autograder" / STAGE / "hidden.json").read_text())["count"] == len(HIDDEN)
     answers = list((release / "autograder" / STAGE / "answers").glob("*.npz"))
-    assert answers and all(a.name.startswith(("render-", "parts-", "truth-")) for a in answers)
+    assert answers and all(a.name.startswith(("render-", "parts-", "reshape_parts-", "truth-")) for a in answers)
     manifest = json.loads((release / "autograder" / STAGE / "public.json").read_text())
-    assert len(manifest["tests"]) == 12 and all(t["check"]["module"].endswith(".checks") for t in manifest["tests"])
+    assert len(manifest["tests"]) == len(TESTS) - len(HIDDEN) and all(t["check"]["module"].endswith(".checks") for t in manifest["tests"])
     setup = (release / "setup.sh").read_text()
     assert "main job" not in setup and "cs451 render" not in setup and "-e .   # the kit's engine" in setup and "[dev" not in setup
 
@@ -152,14 +157,14 @@ def test06_the_workflow_grades_the_starter_zero_and_a_solution_full(release):
     codes = run_workflow(release)
     assert codes == [0] * 8
     results = json.loads((release / "results.json").read_text())
-    assert results["score"] == pytest.approx(60)  # the public tests' points, from the packaged answers
+    assert results["score"] == pytest.approx(PUBLIC_POINTS)  # from the packaged answers
     report = (release / "report" / "report.html").read_text()
-    assert "9 hidden tests (40 points), run after the deadline" in report
+    assert f"{HIDDEN_NOTE}, run after the deadline" in report
 
 
 def test07_workflow_points_add_up_to_the_public_tests(release):
     text = (release / ".github" / "workflows" / "classroom.yml").read_text()
-    assert sum(float(p) for p in re.findall(r"max-score: ([\d.]+)", text)) == 60
+    assert sum(float(p) for p in re.findall(r"max-score: ([\d.]+)", text)) == PUBLIC_POINTS
     assert text.count("_RESULTS:") == 7
 
 

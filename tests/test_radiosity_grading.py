@@ -57,9 +57,11 @@ def test03_starter_scores_zero_with_a_hint_per_test():
     ("display.py", "return positions, sums / counts[:, None], inverse.astype(np.int64)",
      "return positions, sums / 4.0, inverse.astype(np.int64)", {"R5"}),
     ("shooting.py", "received = reflectance * (row * (areas[i] / areas))[:, None]", "received = reflectance * row[:, None]",
-     {"R2", "R3", "R5"}),
+     {"R2", "R3"}),
 ])
 def test04_one_broken_function_loses_its_task_and_what_calls_it(make_submission, file, old, new, lost):
+    """The image tests show the reference's R3 and R4 values (R5 alone is judged); only R3 runs the student's R2,
+    and its failing tests say so."""
     result = grade("radiosity", make_submission("radiosity", file, old, new), show_progress=False)
     full = {t: sum(x.points for x in load_tests("radiosity") if x.task == t) for t in ("R1", "R2", "R3", "R4", "R5")}
     got = points_by_task(result)
@@ -68,6 +70,9 @@ def test04_one_broken_function_loses_its_task_and_what_calls_it(make_submission,
             assert got[task] < points, f"breaking {file} should cost {task} points"
         else:
             assert got[task] == points, f"breaking {file} cost {task} {points - got[task]} points"
+    if lost == {"R2", "R3"}:
+        failing_r3 = [r for r in result.results if r.test.task == "R3" and r.score < r.test.points]
+        assert all("relies on your own R2 shoot(), and R2 shoot() loses points in its own tests" in r.verdict.message for r in failing_r3)
 
 
 def test05_demo_writes_frames_and_an_animation(tmp_path):

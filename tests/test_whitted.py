@@ -204,10 +204,15 @@ def _points_by_task(result):
     ("camera.py", "y = (1.0 - 2.0 * (np.arange(height) + 0.5) / height) * tan_y",
      "y = (2.0 * (np.arange(height) + 0.5) / height - 1.0) * tan_y", "W1", set()),           # rows from the bottom
     ("optics.py", "t = eta[:, None] * d + (eta * cos_i - cos_t)[:, None] * n",
-     "t = eta[:, None] * d - (eta * cos_i - cos_t)[:, None] * n", "W9", {"W11"}),             # bent the wrong way
+     "t = eta[:, None] * d - (eta * cos_i - cos_t)[:, None] * n", "W9", set()),               # bent the wrong way
+    ("optics.py", "return d - 2.0 * np.einsum(", "return d + 2.0 * np.einsum(", "W8", set()),  # the sign of reflect
+    ("optics.py", "rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)", "rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)",
+     "W10", set()),                                                                           # r_s written as r_p
+    ("bvh.py", "return median_bvh(lo, hi, LEAF_SIZE)", "return median_bvh(lo, hi, 16)", "W4", set()),  # leaves of 16
 ])
 def test15_one_broken_function_loses_its_task_only(make_submission, file, old, new, task, also):
-    """Every test but the image tests feeds trusted inputs, so a bug costs its own task (and W11's images)."""
+    """Tests of later tasks get the reference's parts (camera rays, hierarchy, reflect/refract/fresnel answers
+    for W11), so a bug costs its own task only."""
     from cs451.grading.runner import grade
     result = grade("whitted", make_submission("whitted", file, old, new), show_progress=False)
     got = _points_by_task(result)
@@ -218,3 +223,19 @@ def test15_one_broken_function_loses_its_task_only(make_submission, file, old, n
     assert got[task] < full[task]
     assert {k: v for k, v in got.items() if k != task and k not in also} == \
         {k: v for k, v in full.items() if k != task and k not in also}
+
+
+def test16_trace_tests_answer_reflect_with_the_references_answers(make_submission, ref):
+    """W11's trusted parts: a reflect with the wrong sign is answered by the reference where the reference's own
+    trace asked, so the image and the counters are the reference's; without them they are not."""
+    from autograder.whitted.public import two_mirrors
+    broken = load_impl(resolve_impl(make_submission("whitted", "optics.py", "return d - 2.0 * np.einsum(",
+                                                    "return d + 2.0 * np.einsum("), "whitted"), "whitted")
+    for scene, size in ((scene_dict("whitted"), [24, 18]), (two_mirrors(0.5, 0.1, 10), [8, 6])):
+        parts = whitted.probe_trace_parts(ref, scene, size)
+        want = whitted.probe_render(ref, scene, size, **parts)
+        got = whitted.probe_render(broken, scene, size, **parts)
+        assert np.array_equal(got["image"], want["image"]) and got["reflection"] == want["reflection"] > 0
+        alone = whitted.probe_render(broken, scene, size, origins=parts["origins"], directions=parts["directions"])
+        assert alone["reflection"] != want["reflection"]
+    assert np.array_equal(broken.reflect(np.array([[0.0, 0.0, -1.0]]), np.array([[0.0, 0.0, 1.0]])), [[0.0, 0.0, -3.0]])

@@ -2,11 +2,15 @@
 
 Points per task (the rubric in assignments/04-radiosity/README.md):
 R1 15, R2 15, R3 35, R4 10, R5 25 in all; hidden.py holds part of each task's points.
+Every case a hidden test checks (max_edge 0, overshooting, a triangle's repeated corner) has a
+public test too.
 
 Scene tests get their patches and form factors from the reference run of the probe
 ``system`` (stage 3's trusted hemicube engine), so a bug in R1 or in stage 3 costs nothing
-elsewhere. R3's tests run the submission's own R2 inside its loop, and the image tests its
-R3, R4 and R5 (tests/test_radiosity_grading.py checks which tasks a broken function costs).
+elsewhere; the image tests also get the values the reference's R3 and R4 display
+(``solved_system``), so they judge R5 alone. R3's tests run the submission's own R2 inside
+its loop, and say so when they fail (tests/test_radiosity_grading.py checks which tasks a
+broken function costs).
 """
 from __future__ import annotations
 
@@ -105,20 +109,21 @@ def by_hand_test(name, points, system, max_shots, tolerance=0.0, overshoot=1.0) 
     params = {**system, "tolerance": tolerance, "max_shots": max_shots, "overshoot": overshoot}
     return Test(name, "R3", points, "progressive", params, check(checks.loop_matches),
                 "same shots in the same order; B, ΔB within 1e-8", expected="none", truth=truth(truths.shooting_loop),
-                timeout=SOLVE)
+                timeout=SOLVE, depends_on=("R2",))
 
 
 def furnace_test(name, points, albedo, tolerance, overshoot=1.0) -> Test:
     params = {**furnace_cube(albedo), "tolerance": tolerance, "max_shots": 100_000, "overshoot": overshoot}
     return Test(name, "R3", points, "progressive", params, check(checks.furnace_uniform, want=truths.furnace(1.0, albedo)),
-                "E/(1 − ρ) within twice the tolerance, in as many shots as the reference (± 25%)", timeout=SOLVE)
+                "E/(1 − ρ) within twice the tolerance, in as many shots as the reference (± 25%)", timeout=SOLVE,
+                depends_on=("R2",))
 
 
 def scene_solve_test(name, points, scene, patch_size, tolerance=1e-5, within=1e-3) -> Test:
     params = {"scene": scene, "patch_size": patch_size, "resolution": 32, "tolerance": tolerance, "max_shots": 200_000}
     return Test(name, "R3", points, "progressive", params, check(checks.converged_to_direct, within=within),
                 f"within {within:.1%} of the direct solve (sum of |differences|), in as many shots as the reference (± 25%)",
-                given="system", timeout=SOLVE)
+                given="system", timeout=SOLVE, depends_on=("R2",))
 
 
 def ambient_test(name, points, areas, reflectance, unshot) -> Test:
@@ -138,7 +143,7 @@ def vertex_test(name, points, quads, parent, radiosity) -> Test:
 
 def render_test(name, points, scene, size, patch_size) -> Test:
     params = {"scene": scene, "size": list(size), "patch_size": patch_size, "resolution": 32, "tolerance": 1e-3}
-    return Test(name, "R5", points, "render", params, image_matches(IMAGE), IMAGE.describe(), given="system",
+    return Test(name, "R5", points, "render", params, image_matches(IMAGE), IMAGE.describe(), given="solved_system",
                 timeout=RENDER)
 
 
@@ -151,20 +156,38 @@ def _grid_patches() -> tuple[list, list, list]:
 
 GRID = _grid_patches()
 
+
+def _triangle_beside_quad() -> tuple[list, list, list]:
+    """A triangle (its last corner repeated) cut into patches beside a quad: a repeated corner is one vertex."""
+    polygons = np.array([[[0, 0, 0], [1.5, 0, 0], [0, 1.5, 0], [0, 1.5, 0]], [[1.5, 0, 0], [1.5, 1.5, 0], [0, 1.5, 0],
+                                                                           [0, 1.5, 0]]], float)
+    patches, parent = truths.subdivide_by_hand(polygons, 0.8)
+    return lists(patches), parent.tolist(), lists(np.random.default_rng(8).uniform(0, 1, (len(patches), 3)))
+
+
+#: The hand-worked scene after its first shot with overshooting ω = 1.5: patch 0 keeps ΔB = (1 − ω)·E, negative.
+OVERSHOT = [[-5.0, -2.5, -1.0], [4.5, 1.8, 0.54], [2.4, 0.3, 0.36]]
+
 TESTS = [
     subdivide_test("R1 subdivide: the Cornell box at 100 mm", 6, scene_quads("cornell-box"), 100.0),
     subdivide_test("R1 subdivide: a triangle and a quad", 4,
                    [[[0, 0, 0], [4, 0, 0], [0, 3, 0], [0, 3, 0]], [[0, 0, 1], [2, 0, 1], [2, 0.5, 1], [0, 1, 1]]], 1.0),
+    subdivide_test("R1 subdivide: max_edge 0 keeps the quads", 1, scene_quads("furnace"), 0.0),
     shoot_test("R2 shoot: the hand-worked emitter shoots", 5, HAND, 0),
     shoot_test("R2 shoot: a receiver shoots back, B and ΔB already set", 5, HAND, 1,
                radiosity=[[10.0, 5.0, 2.0], [3.0, 1.2, 0.36], [1.6, 0.2, 0.24]],
                unshot=[[0.0, 0.0, 0.0], [3.0, 1.2, 0.36], [1.6, 0.2, 0.24]]),
     by_hand_test("R3 progressive_refinement: the hand-worked scene, 4 shots (patch 1 shoots twice)", 6, HAND, 4),
     by_hand_test("R3 progressive_refinement: the hand-worked scene to 1e-6", 5, HAND, 10_000, tolerance=1e-6),
+    by_hand_test("R3 progressive_refinement: the hand-worked scene overshooting (ω = 1.5), 6 shots", 3, HAND, 6,
+                 overshoot=1.5),
     furnace_test("R3 progressive_refinement: the furnace, ρ = 0.9", 6, 0.9, 1e-4),
     scene_solve_test("R3 progressive_refinement: the Cornell box converges to the direct solve", 8, CORNELL, 140.0),
     ambient_test("R4 ambient_term: the hand-worked scene after one shot", 6, HAND["areas"], HAND["reflectance"],
                  [[0.0, 0.0, 0.0], [3.0, 1.2, 0.36], [1.6, 0.2, 0.24]]),
+    ambient_test("R4 ambient_term: after an overshot shot (a negative ΔB counts with its sign)", 2, HAND["areas"],
+                 HAND["reflectance"], OVERSHOT),
     vertex_test("R5 vertex_colors: three walls of the furnace, 3 × 3 patches each", 6, *GRID),
+    vertex_test("R5 vertex_colors: a triangle (repeated corner) beside a quad", 2, *_triangle_beside_quad()),
     render_test("R5 render: the Cornell box", 8, CORNELL, (128, 128), 100.0),
 ]

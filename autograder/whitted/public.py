@@ -1,7 +1,9 @@
 """Stage 2 public tests: students run these with ``cs451 grade whitted``.
 
 Points per task (the rubric in assignments/02-whitted/README.md): W1 8, W2 10, W3 10, W4 8, W5 12,
-W6 7, W7 9, W8 4, W9 7, W10 5, W11 20; hidden.py holds the rest of each task's points.
+W6 7, W7 9, W8 4, W9 7, W10 5, W11 20; hidden.py holds the rest of each task's points. Every case a hidden
+test checks (a rolled camera, a far small sphere, zero-area triangles, rays from inside a sphere, a
+checkerboard in a shadow, total internal reflection, the depth limit) has a public test too.
 Images are small (at most 96×72) so that a clear numpy tracer grades in seconds.
 """
 from __future__ import annotations
@@ -89,11 +91,12 @@ def sphere_test(name, points, **params) -> Test:
                 truth=truth(truths.sphere_roots), timeout=QUICK)
 
 
-def triangle_test(name, points, **params) -> Test:
+def triangle_test(name, points, edge_case=False, **params) -> Test:
+    """``edge_case``: every right answer is a miss (zero-area triangles), so it counts only beside a passing W3 test."""
     return Test(name, "W3", points, "intersect_triangle", params,
                 all_of([("hits and misses against exact arithmetic", sub(checks.triangle_hits))]),
                 "t within 1e-9 relative of exact arithmetic; misses inf", expected="none",
-                truth=truth(truths.triangle_hits), timeout=QUICK)
+                truth=truth(truths.triangle_hits), edge_case=edge_case, timeout=QUICK)
 
 
 def watertight_test(name, points, center, fan) -> Test:
@@ -130,13 +133,17 @@ def bvh_test(name, points, **params) -> Test:
                 "≤ 1.5× a median split's", expected="none", truth=truth(truths.hierarchy_boxes), timeout=HITS)
 
 
+#: W5's and W7's tests run the submission's own intersection functions inside its closest_hit and shadow rays.
+INTERSECT = ("W2", "W3")
+
+
 def depth_test(name, points, scene, size) -> Test:
     return Test(name, "W5", points, "closest_hit", {"scene": scene, "size": list(size)},
                 all_of([("primary visibility matches a rasteriser", sub(checks.depth_visibility)),
                         ("unit normals", sub(checks.depth_normals))],
                        require=["primary visibility matches a rasteriser"]),
                 "hit or miss and depth (5e-3 relative) within the range of pyrender's depth buffer over the pixel's central third, on ≥ 98% of pixels",
-                expected="none", given="primary_rays", truth=truth(truths.depth_range), timeout=HITS)
+                expected="none", given="hit_parts", truth=truth(truths.depth_range), timeout=HITS, depends_on=INTERSECT)
 
 
 def hits_test(name, points, scene, rays=None, size=None, hierarchy=None) -> Test:
@@ -149,7 +156,7 @@ def hits_test(name, points, scene, rays=None, size=None, hierarchy=None) -> Test
         params["hierarchy"] = hierarchy
     return Test(name, "W5", points, "closest_hit", params, check(checks.hits_match),
                 "same primitive as the reference on ≥ 99% of rays; t within 1e-6 relative; normals within 1e-6",
-                given=None if rays is not None else "primary_rays", timeout=HITS)
+                given="hit_parts", timeout=HITS, depends_on=INTERSECT)
 
 
 def shading_test(name, points, **params) -> Test:
@@ -165,11 +172,11 @@ def shadow_test(name, points, scene, origins, targets) -> Test:
                         ("shadow rays counted", sub(checks.shadow_counted))],
                        earn_with=["transmission through every surface crossed"]),
                 "within 1e-9 of a brute-force walk over the objects", expected="none",
-                truth=truth(truths.transmission), timeout=HITS)
+                truth=truth(truths.transmission), timeout=HITS, depends_on=INTERSECT)
 
 
 def reflect_test(name, points, **params) -> Test:
-    return Test(name, "W8", points, "reflect", params, array_close("r", rtol=0, atol=1e-9, what="the reflected directions"),
+    return Test(name, "W8", points, "reflect", params, array_close("r", rtol=0, atol=1e-9, what="the reflected directions", plural=True),
                 "within 1e-9", expected="none", truth=truth(truths.reflect), timeout=QUICK)
 
 
@@ -188,9 +195,14 @@ def fresnel_test(name, points, **params) -> Test:
                 truth=truth(truths.fresnel), timeout=QUICK)
 
 
+#: What a W11 test runs of the submission besides its trace: the camera rays, the hierarchy and the answers of
+#: reflect, refract and fresnel are the reference's (``trace_parts``), closest_hit, local_shading and shadow rays are not.
+TRACE_USES = ("W5", "W6", "W7")
+
+
 def image_test(name, points, scene, size) -> Test:
     return Test(name, "W11", points, "render", {"scene": scene, "size": list(size)}, image_matches(IMAGE),
-                IMAGE.describe(), given="primary_rays", timeout=RENDER)
+                IMAGE.describe(), given="trace_parts", timeout=RENDER, depends_on=TRACE_USES)
 
 
 def counter_test(name, points, scene, size, expect: dict) -> Test:
@@ -203,7 +215,8 @@ def counter_test(name, points, scene, size, expect: dict) -> Test:
         kw = {"at_least_one": True} if want == "some" else {"per_pixel": want}
         parts.append((f"{key} rays", sub(checks.counter, key=key, **kw)))
     return Test(name, "W11", points, "render", {"scene": scene, "size": list(size)}, all_of(parts, require=["the image"]),
-                "exact counts, beside an image within the image tolerance", given="primary_rays", timeout=RENDER)
+                "exact counts, beside an image within the image tolerance", given="trace_parts", timeout=RENDER,
+                depends_on=TRACE_USES)
 
 
 RNG = np.random.default_rng(12345)
@@ -246,7 +259,7 @@ SHADOW_SEGMENTS = {  # through the glass sphere (twice), the film, the stone, no
     "targets": [[0, 5, 0], [0, 5, 0], [3, 5, 0], [-3, 5, 0], [0, -1.5, 0], [-0.4, 4, -0.2], [-5, 0, 0]],
 }
 
-REFLECT = {"directions": _unit(RNG.normal(size=(20, 3)) - [0, 0, 3]), "normals": [[0, 0, 1]] * 20}
+_REFLECT_UNUSED = RNG.normal(size=(20, 3))   # drawn as before, so that the data after it stays the same
 _dirs = np.asarray(_unit(RNG.normal(size=(24, 3)) + [0, 0, -1.5]))
 REFRACT_IN = {"directions": _dirs.tolist(), "normals": [[0, 0, 1]] * 24, "eta": 1 / 1.5}
 REFRACT_OUT = {"directions": _dirs.tolist(), "normals": [[0, 0, 1]] * 24, "eta": 1.5}
@@ -254,21 +267,68 @@ REFRACT_OUT = {"directions": _dirs.tolist(), "normals": [[0, 0, 1]] * 24, "eta":
 BOX_LO = RNG.uniform(-10, 10, (1000, 3))
 BOX_HI = BOX_LO + RNG.uniform(0.1, 2.0, (1000, 3))   # each box 0.1 to 2 units wide
 
+# --- cases the hidden tests check at other numbers, shown here once (their own generator: the data above stays) ---
+MORE = np.random.default_rng(2024)
+
+#: A camera rolled about its view direction (up not perpendicular to it), on a tall image.
+ROLLED_CAMERA = {"eye": [-2, 3, 5], "center": [0.5, 0.5, -1], "up": [0.4, 1, 0.2], "fovy": 60}
+
+#: A 5e-4 sphere 1e4 units away: the textbook quadratic cancels completely here.
+FAR_SPHERE = np.array([-2e3, 6e3, 7.5e3])
+FAR_SPHERE_RAYS = {"origins": [[0, 0, 0]] * 24, "directions": (FAR_SPHERE + MORE.uniform(-6e-4, 6e-4, (24, 3))).tolist()}
+
+#: Triangles of zero area: a repeated corner (a triangle stored as a quad, say) and three equal corners.
+_corner = MORE.uniform(-1, 1, (8, 3))
+_other = MORE.uniform(-1, 1, (8, 3))
+_from = MORE.uniform(-1, 1, (8, 3)) + [0, 0, 4]
+ZERO_AREA = {"origins": _from.tolist(), "directions": ((_corner + _other) / 2 - _from).tolist(),
+             "v0": _corner.tolist(), "v1": _other.tolist(), "v2": np.r_[_other[:6], _corner[6:]].tolist()}
+ZERO_AREA["v1"][7] = ZERO_AREA["v0"][7]
+
+#: Rays in Whitted's scene from outside and from inside the glass sphere (its centre is (-0.55, 0.85, 0.9)).
+_o = np.r_[MORE.uniform(-3, 3, (60, 3)) + [0, 2, 4], np.tile([[-0.4, 0.7, 1.0]], (30, 1))]
+WHITTED_SOME_RAYS = {"origins": _o.tolist(), "directions": _unit(MORE.normal(size=(90, 3)))}
+
+#: A checkerboard plane whose squares are two kinds of glass: a shadow ray takes the transmittance of the square it crosses.
+CHECKER_SHADOW_SCENE = {
+    "camera": {"eye": [0, 0, 10], "center": [0, 0, 0]},
+    "lights": [{"type": "point", "position": [0, 5, 0]}],
+    "materials": {"glass": {"transmittance": [0.5, 0.6, 0.7]}, "film": {"transmittance": [0.2, 0.4, 0.8]}},
+    "objects": [{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "material": "glass", "checker": 1.0,
+                 "checker_material": "film"}],
+}
+_x = MORE.uniform(-3, 3, (16, 2))
+CHECKER_SEGMENTS = {"origins": np.c_[_x[:, 0], np.full(16, -1.0), _x[:, 1]].tolist(),
+                    "targets": np.c_[_x[:, 0] + MORE.uniform(-0.5, 0.5, 16), np.full(16, 2.0),
+                                     _x[:, 1] + MORE.uniform(-0.5, 0.5, 16)].tolist()}
+
+_d = np.asarray(_unit(MORE.normal(size=(20, 3))))
+REFLECT = {"directions": _d.tolist(), "normals": _unit(-_d + MORE.normal(size=(20, 3)) * 0.4)}
+
 TESTS = [
-    camera_test("W1 camera_rays: the Whitted scene's camera, 8×6", 5, camera=WHITTED["camera"], width=8, height=6),
+    camera_test("W1 camera_rays: the Whitted scene's camera, 8×6", 4, camera=WHITTED["camera"], width=8, height=6),
+    camera_test("W1 camera_rays: a rolled camera (up not perpendicular to the view), 5×7, fovy 60°", 2,
+                camera=ROLLED_CAMERA, width=5, height=7),
     sphere_test("W2 intersect_sphere: hits, a miss, a ray from inside, a sphere behind", 6, center=[0, 0, 0], radius=1.0,
                 **SPHERE_RAYS),
+    sphere_test("W2 intersect_sphere: a 5e-4 sphere 1e4 away (no cancellation)", 2, center=FAR_SPHERE.tolist(),
+                radius=5e-4, **FAR_SPHERE_RAYS),
     triangle_test("W3 intersect_triangle: hits, misses, behind, parallel", 3, **TRI_RAYS,
                   **{k: [v] * len(TRI_RAYS["origins"]) for k, v in TRI.items()}),
+    triangle_test("W3 intersect_triangle: zero-area triangles are never hit", 1, edge_case=True, **ZERO_AREA),
     watertight_test("W3 intersect_triangle: no gaps in a fan of six triangles", 3, center=[0.1, 0.2, 3],
                     fan=[[np.cos(a), np.sin(a), 0.1 * np.sin(3 * a)] for a in np.linspace(0, 2 * np.pi, 7)[:-1]]),
     bvh_test("W4 build_bvh: 1000 random boxes", 5, lo=BOX_LO.tolist(), hi=BOX_HI.tolist()),
     depth_test("W5 closest_hit: primary visibility of the Cornell box against pyrender, 64×64", 7, CORNELL, (64, 64)),
+    hits_test("W5 closest_hit: 90 rays in Whitted's scene, 30 from inside the glass", 2, WHITTED, rays=WHITTED_SOME_RAYS),
     shading_test("W6 local_shading: 40 random points, lights and materials", 4, **SHADE),
     shadow_test("W7 shadow_transmission: glass, a film, a stone, nothing", 5, SHADOW_SCENE, **SHADOW_SEGMENTS),
-    reflect_test("W8 reflect: 20 random directions", 2, **REFLECT),
+    shadow_test("W7 shadow_transmission: a checkerboard of two glasses", 2, CHECKER_SHADOW_SCENE, **CHECKER_SEGMENTS),
+    reflect_test("W8 reflect: 20 random directions and normals", 2, **REFLECT),
     refract_test("W9 refract: into glass (η = 1/1.5)", 4, **REFRACT_IN),
+    refract_test("W9 refract: out of glass (η = 1.5), with total internal reflection", 2, **REFRACT_OUT),
     fresnel_test("W10 fresnel: air to glass over all angles", 3, cos_i=np.linspace(0, 1, 21).tolist(), eta=1 / 1.5),
+    fresnel_test("W10 fresnel: glass to air, past the critical angle", 1, cos_i=np.linspace(0, 1, 11).tolist(), eta=1.5),
     image_test("W11 trace: Whitted's scene, 96×72", 6, WHITTED, (96, 72)),
     counter_test("W11 trace: no mirror or glass casts no secondary ray (Cornell box, 32×32)", 2, CORNELL, (32, 32),
                  {"camera": 1, "reflection": 0, "transmission": 0, "shadow": "some"}),
@@ -276,4 +336,6 @@ TESTS = [
                  {"camera": 1, "shadow": 0}),
     counter_test("W11 trace: the β cut-off between two mirrors (r = 0.5, cut-off 0.1)", 2, two_mirrors(0.5, 0.1, 10),
                  (16, 12), {"camera": 1, "reflection": mirror_rays(0.5, 0.1, 10), "transmission": 0}),
+    counter_test("W11 trace: the depth limit between two mirrors (r = 0.9, cut-off 0.01, depth 3)", 1,
+                 two_mirrors(0.9, 0.01, 3), (12, 8), {"camera": 1, "reflection": mirror_rays(0.9, 0.01, 3)}),
 ]

@@ -226,8 +226,15 @@ def shading(p: dict) -> np.ndarray:
 # --- W7: a brute-force walk over every object ------------------------------------------------------
 
 def transmission(p: dict) -> np.ndarray:
-    """Product of the transmittances crossed strictly between origin and target, object by object."""
+    """Product of the transmittances crossed strictly between origin and target, object by object.
+
+    A checkerboard plane crossed in one of its odd squares takes the checker material's transmittance:
+    which square a point is in comes from the kit's plane frame (``TraceScene.material_at``), the one
+    convention every implementation shares.
+    """
     sc = parse_scene(p["scene"], "<truth scene>")
+    arrays = raytrace.build(sc)
+    planes = [obj for obj in sc.objects if isinstance(obj, Plane)]
     o, x = _vec(p, "origins"), _vec(p, "targets")
     out = np.ones((len(o), 3))
     for i in range(len(o)):
@@ -253,7 +260,12 @@ def transmission(p: dict) -> np.ndarray:
                         ts.append(t)
             for t in ts:
                 if 0 < t < length:
-                    out[i] *= np.asarray(m.transmittance)
+                    if isinstance(obj, Plane) and obj.checker > 0:
+                        prim = arrays.n_bounded + next(k for k, q in enumerate(planes) if q is obj)
+                        square = arrays.material_at(np.array([prim]), (o[i] + t * d)[None])[0]
+                        out[i] *= arrays.mat_transmittance[square]
+                    else:
+                        out[i] *= np.asarray(m.transmittance)
     return out
 
 

@@ -59,20 +59,15 @@ class ItemBufferRenderer:
 
     def __init__(self, quads: np.ndarray, shaders: tuple[str, str], resolution: int, projections: np.ndarray,
                  batch: int, ctx: Any = None):
-        from ..gl import create_context
+        from ..gl import compile_program, create_context
         self.resolution = r = int(resolution)
         self.ctx = ctx = ctx or create_context()
         vs, fs = shaders
         for name, src in (("vertex", vs), ("fragment", fs)):
             if "#version" in src:
                 raise KitError(f"H4 item_buffer_shaders(): the {name} shader must not have a #version line (the kit adds it)")
-        try:
-            self.program = ctx.program(vertex_shader=VERTEX_INTERFACE + "#define main item_main\n" + vs + _VERTEX_ENGINE,
-                                       fragment_shader=FRAGMENT_INTERFACE + fs)
-        except Exception as err:  # moderngl reports compile and link errors as plain Exceptions
-            lines = str(err).strip().splitlines() or ["unknown error"]
-            first = next((ln for ln in lines if "error" in ln.lower()), lines[0])
-            raise KitError(f"H4: shader does not compile: {first.strip()}") from None
+        self.program = compile_program(ctx, "H4", (VERTEX_INTERFACE + "#define main item_main\n", vs, _VERTEX_ENGINE),
+                                       (FRAGMENT_INTERFACE, fs, ""))
         tris, ids = patch_triangles(quads)
         self.origin = quads.reshape(-1, 3).mean(axis=0)   # draw relative to the scene's middle: float32 keeps precision
         positions = (tris - self.origin).astype("f4").reshape(-1, 3)

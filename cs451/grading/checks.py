@@ -14,6 +14,7 @@ import numpy as np
 
 from ..compare import ImageTolerance, compare_images, difference_image, error_heatmap
 from ..imageio import to_uint8
+from ..stages.base import shape_text
 from .spec import CHECK_MODULES, Outputs, Ref, Verdict, check
 
 
@@ -29,8 +30,7 @@ def output(out: Outputs, key: str, shape: tuple[int | None, ...] | None = None, 
     if value.dtype.kind not in "biuf":
         raise ShapeError(f"{what or key} holds {value.dtype} values, not numbers")
     if shape is not None and (value.ndim != len(shape) or any(s is not None and s != g for s, g in zip(shape, value.shape))):
-        want = "(" + ", ".join("n" if s is None else str(s) for s in shape) + ("," if len(shape) == 1 else "") + ")"
-        raise ShapeError(f"{what or key} has shape {value.shape}, expected {want}")
+        raise ShapeError(f"{what or key} has shape {value.shape}, expected {shape_text(shape)}")
     return value.astype(np.float64)
 
 
@@ -41,25 +41,30 @@ def _worst_entry(got: np.ndarray, want: np.ndarray) -> str:
 
 
 def close_to(out: Outputs, expected: Outputs, params: dict, key: str, truth_key: str = "value", rtol: float = 1e-6,
-             atol: float = 1e-9, what: str = "result") -> Verdict:
-    """The output ``key`` equals ``expected[truth_key]`` within tolerance (same shape, finite, non-empty)."""
+             atol: float = 1e-9, what: str = "result", plural: bool = False) -> Verdict:
+    """The output ``key`` equals ``expected[truth_key]`` within tolerance (same shape, finite, non-empty).
+
+    ``what`` names the output in messages; ``plural`` when it is a plural noun ("the five view matrices match").
+    """
+    is_, has, match = ("are", "contain", "match") if plural else ("is", "contains", "matches")
     want = np.asarray(expected[truth_key], dtype=np.float64)
     try:
         got = output(out, key, want.shape, what)
     except ShapeError as err:
         return Verdict.of(False, str(err))
     if not np.isfinite(got).all():
-        return Verdict.of(False, f"{what} contains NaN or infinite values")
+        return Verdict.of(False, f"{what} {has} NaN or infinite values")
     if got.size == 0:
-        return Verdict.of(False, f"{what} is empty")
+        return Verdict.of(False, f"{what} {is_} empty")
     if np.allclose(got, want, rtol=rtol, atol=atol):
-        return Verdict.of(True, f"{what} matches")
-    return Verdict.of(False, f"{what} is wrong: {_worst_entry(got, want)}")
+        return Verdict.of(True, f"{what} {match}")
+    return Verdict.of(False, f"{what} {is_} wrong: {_worst_entry(got, want)}")
 
 
-def array_close(key: str, truth_key: str = "value", rtol: float = 1e-6, atol: float = 1e-9, what: str = "result") -> Ref:
-    """The check that output ``key`` equals the truth's ``truth_key`` within tolerance."""
-    return check(close_to, key=key, truth_key=truth_key, rtol=rtol, atol=atol, what=what)
+def array_close(key: str, truth_key: str = "value", rtol: float = 1e-6, atol: float = 1e-9, what: str = "result",
+                plural: bool = False) -> Ref:
+    """The check that output ``key`` equals the truth's ``truth_key`` within tolerance (``plural``: see :func:`close_to`)."""
+    return check(close_to, key=key, truth_key=truth_key, rtol=rtol, atol=atol, what=what, plural=plural)
 
 
 def _shown(image: np.ndarray, params: dict) -> np.ndarray:

@@ -287,7 +287,7 @@ def _grade_tests(out: GradeResult, tests: list[Test], probes: Any, reference: Re
                 bar.advance(note=tests[i].number)
     if bar:
         bar.close()
-    out.results = _edge_cases_need_the_main_tests([results[i] for i in range(len(tests))])
+    out.results = _name_failing_dependencies(out.stage, _edge_cases_need_the_main_tests([results[i] for i in range(len(tests))]))
 
 
 def _edge_cases_need_the_main_tests(results: list[TestResult]) -> list[TestResult]:
@@ -301,3 +301,29 @@ def _edge_cases_need_the_main_tests(results: list[TestResult]) -> list[TestResul
                                                      f"{r.test.task} test passes"), r.output, r.seconds)
         out.append(r)
     return out
+
+
+def _name_failing_dependencies(stage: str, results: list[TestResult]) -> list[TestResult]:
+    """A test that lost points and runs the submission's own earlier functions (``depends_on``) says so, and
+    which of those lose points in their own tests here: fix those first (the test may be right then)."""
+    losing = {r.test.task for r in results if r.score < r.test.points}
+    spec = get_stage(stage)
+    out = []
+    for r in results:
+        deps = [d for d in r.test.depends_on if d != r.test.task]
+        if deps and r.score < r.test.points:
+            names = [f"{d} {spec.task(d).function}()" for d in deps]
+            failing = [n for d, n in zip(deps, names) if d in losing]
+            if failing:
+                note = (f"; this test relies on your own {_and(names)}, and {_and(failing)} "
+                        f"{'loses' if len(failing) == 1 else 'lose'} points in {'its' if len(failing) == 1 else 'their'} "
+                        f"own tests: fix {'that' if len(failing) == 1 else 'those'} first")
+            else:
+                note = f"; this test relies on your own {_and(names)}"
+            r = TestResult(r.test, r.score, replace(r.verdict, message=r.verdict.message + note), r.output, r.seconds)
+        out.append(r)
+    return out
+
+
+def _and(items: list[str]) -> str:
+    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]

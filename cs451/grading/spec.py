@@ -126,6 +126,9 @@ class Test:
     hidden: bool = False
     timeout: float = 60.0
     number: str = ""                # filled in by the loader: "S1.2"
+    #: earlier tasks whose functions this test runs as the submission's own (no trusted stand-in exists):
+    #: a failing test names them, and says which of them fail their own tests
+    depends_on: tuple[str, ...] = ()
 
     @property
     def visibility(self) -> str:
@@ -137,11 +140,11 @@ class Test:
         return {"name": self.name, "task": self.task, "points": self.points, "probe": self.probe,
                 "params": self.params, "check": self.check.to_json(), "tolerance": self.tolerance,
                 "expected": self.expected, "given": self.given, "truth": self.truth.to_json() if self.truth else None,
-                "edge_case": self.edge_case, "timeout": self.timeout}
+                "edge_case": self.edge_case, "timeout": self.timeout, "depends_on": list(self.depends_on)}
 
     @staticmethod
     def from_json(data: dict[str, Any]) -> "Test":
         return Test(data["name"], data["task"], float(data["points"]), data["probe"], data["params"],
                     Ref.from_json(data["check"]), data["tolerance"], data["expected"], data.get("given"),
                     Ref.from_json(data["truth"]) if data.get("truth") else None, bool(data.get("edge_case")), False,
-                    float(data["timeout"]))
+                    float(data["timeout"]), depends_on=tuple(data.get("depends_on", ())))

@@ -6,9 +6,11 @@ the autograder and the demos reach student code only through it.
 from __future__ import annotations
 
 import inspect
+import sys
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from types import ModuleType
-from typing import Any, Callable
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
@@ -84,6 +86,12 @@ def student_call(stage: Stage, module: Any, task_id: str, *args: Any) -> Any:
         raise KitError(f"{task.id} {task.function}() is not implemented yet: {hint}") from None
 
 
+def shape_text(shape: tuple[int | None, ...]) -> str:
+    """A shape as Python writes it, with ``n`` for any length: ``(7,)``, ``(n, 3)``, ``(4, 4)``."""
+    inner = ", ".join("n" if s is None else str(s) for s in shape)
+    return f"({inner},)" if len(shape) == 1 else f"({inner})"
+
+
 def as_array(value: Any, shape: tuple[int | None, ...], what: str, kind: str = "f") -> np.ndarray:
     """Check a student's result: array-like, of this shape (None = any length), finite; else a KitError."""
     try:
@@ -91,8 +99,7 @@ def as_array(value: Any, shape: tuple[int | None, ...], what: str, kind: str = "
     except (TypeError, ValueError) as err:
         raise KitError(f"{what} returned something that is not an array ({type(value).__name__}: {err})") from None
     if arr.ndim != len(shape) or any(s is not None and s != a for s, a in zip(shape, arr.shape)):
-        want = "(" + ", ".join("n" if s is None else str(s) for s in shape) + ")"
-        raise KitError(f"{what} returned shape {arr.shape}, expected {want}")
+        raise KitError(f"{what} returned shape {arr.shape}, expected {shape_text(shape)}")
     if kind == "i":
         if arr.dtype.kind not in "iu":
             if arr.dtype.kind == "f" and np.isfinite(arr).all() and np.all(arr == np.round(arr)):
@@ -102,3 +109,29 @@ def as_array(value: Any, shape: tuple[int | None, ...], what: str, kind: str = "
     elif not np.isfinite(arr).all():
         raise KitError(f"{what} returned NaN or infinite values")
     return arr
+
+
+@contextmanager
+def functions_replaced(stage: Stage, impl: Any, wrappers: dict[str, Callable[[Any], Any]]) -> Iterator[None]:
+    """Within the block, each task's function is replaced by ``wrappers[task](own)`` in every module of the
+    implementation's package that holds it, under whatever name, so that its other functions call the replacement.
+
+    How a later task's test gets trusted answers from an earlier task the submission's code calls (W11's trace
+    calling W8 to W10, S6's reshape calling S1), and how the reference's calls are recorded to give them.
+    """
+    own = {task: getattr(impl, stage.task(task).function, None) for task in wrappers}
+    changed = []
+    prefix = impl.__name__
+    for name, module in list(sys.modules.items()):
+        if module is None or not (name == prefix or name.startswith(prefix + ".")):
+            continue
+        for attr, value in list(vars(module).items()):
+            for task, fn in own.items():
+                if fn is not None and value is fn:
+                    setattr(module, attr, wrappers[task](fn))
+                    changed.append((module, attr, value))
+    try:
+        yield
+    finally:
+        for module, attr, value in changed:
+            setattr(module, attr, value)

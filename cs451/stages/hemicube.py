@@ -190,6 +190,34 @@ def probe_scene_rows(impl: Any, scene: dict, rows: list[int], resolution: int = 
     return probe_rows(impl, quads.tolist(), rows, resolution=resolution, proximity=proximity)
 
 
+def probe_hemicube_buffers(impl: Any, quads: list, rows: list[int], resolution: int = 128, rotate: bool = False,
+                           seed: int = 0) -> dict[str, np.ndarray]:
+    """Trusted inputs of the row tests (run on the reference only): the item buffers of the rows' hemicubes,
+    the tables, and the rows before any proximity fix, so that H5's and H6's tests judge H5 or H6 alone."""
+    from ..formfactors import HemicubeFormFactors
+    ff = HemicubeFormFactors(_quads(quads), calls(impl), resolution=resolution, rotate=rotate, proximity="none", seed=seed)
+    tops, sides = ff.item_buffers(rows)
+    top_w, side_w = ff.tables
+    return {"top_items": tops, "side_items": sides, "top_weights": top_w, "side_weights": side_w,
+            "hemicube_rows": ff.rows(list(rows))}
+
+
+def probe_rows_from_buffers(impl: Any, quads: list, rows: list[int], top_items: np.ndarray, side_items: np.ndarray,
+                            top_weights: np.ndarray, side_weights: np.ndarray, **_: Any) -> dict[str, np.ndarray]:
+    """H5 alone: the rows the submission sums from trusted item buffers and tables (the reference's H1 to H4)."""
+    n = len(quads)
+    return {"rows": np.stack([call_row(impl, top.copy(), side.copy(), top_weights, side_weights, n)
+                              for top, side in zip(top_items, side_items)])}
+
+
+def probe_proximity_rows(impl: Any, quads: list, rows: list[int], hemicube_rows: np.ndarray, resolution: int = 128,
+                         rotate: bool = False, seed: int = 0, **_: Any) -> dict[str, np.ndarray]:
+    """H6 alone: trusted hemicube rows (the reference's H1 to H5), fixed for close patches with the submission's H6."""
+    from ..formfactors import HemicubeFormFactors
+    ff = HemicubeFormFactors(_quads(quads), calls(impl), resolution=resolution, rotate=rotate, proximity="contour", seed=seed)
+    return {"rows": np.stack([ff.proximity_fixed(i, row) for i, row in zip(rows, hemicube_rows)])}
+
+
 def probe_item_buffer_parts(impl: Any, quads: list, patch: int, resolution: int) -> dict[str, np.ndarray]:
     """The trusted inputs of an item-buffer image test: the views and projections (from the reference)."""
     from ..formfactors import hemicube_inputs
@@ -208,6 +236,8 @@ STAGE = Stage(
     name="hemicube", number=3, title="Hemi-cube form factors", handout="03-hemicube", tasks=TASKS, render=render,
     probes={"tables": probe_tables, "views": probe_views, "projections": probe_projections,
             "row_from_items": probe_row_from_items, "contour": probe_contour, "rows": probe_rows,
-            "scene_rows": probe_scene_rows, "item_buffer_parts": probe_item_buffer_parts,
+            "scene_rows": probe_scene_rows, "hemicube_buffers": probe_hemicube_buffers,
+            "rows_from_buffers": probe_rows_from_buffers, "proximity_rows": probe_proximity_rows,
+            "item_buffer_parts": probe_item_buffer_parts,
             "item_buffer": probe_item_buffer},
 )

@@ -325,7 +325,10 @@ def solve_progressive(impl: Any, rows: Any, areas: np.ndarray, reflectance: np.n
     order = [int(i) for i in as_array(np.asarray(list(out[2])).reshape(-1), (None,), "R3 progressive_refinement() order", kind="i")]
     emitted = energy(emission, areas)
     residual = energy(unshot, areas) / emitted if emitted > 0 else 0.0
-    display = radiosity + reflectance * call_ambient(impl, areas, reflectance, unshot) if use_ambient else radiosity
+    # with every patch reflecting all of a colour, ρ_avg = 1 and R = 1/(1 − ρ_avg) is infinite: show B alone
+    ambient_defined = not np.all(reflectance >= 1.0, axis=0).any()
+    display = (radiosity + reflectance * call_ambient(impl, areas, reflectance, unshot)
+               if use_ambient and ambient_defined else radiosity)
     counters = dict(getattr(rows, "counters", {}))
     counters.update(patches=n, shots=len(order), distinct_shooters=len(set(order)), rows_requested=len(fetched),
                     patches_never_shot=n - len(set(order)),
@@ -570,18 +573,37 @@ def probe_system(impl: Any, scene: dict, patch_size: float = 0.0, resolution: in
             "emission": p.emission, "F": np.asarray(F, dtype=np.float64), "view": camera_view(sc)}
 
 
+def probe_solved_system(impl: Any, scene: dict, size: list[int] | None = None, tolerance: float = 1e-3,
+                        use_ambient: bool = True, max_shots: int = 0, patch_size: float = 0.0, resolution: int = 64
+                        ) -> dict[str, np.ndarray]:
+    """Trusted inputs for R5's image tests (run on the reference only): the system, and the per-patch values
+    the reference's R3 and R4 display on it, so that an image test judges R5 alone."""
+    out = probe_system(impl, scene, patch_size, resolution)
+    sol = solve_progressive(impl, MatrixRows(out["F"]), out["areas"], out["reflectance"], out["emission"], tolerance,
+                            max_shots, 1.0, use_ambient)
+    out["display"] = sol.display
+    return out
+
+
 def probe_render(impl: Any, scene: dict, size: list[int], tolerance: float = 1e-3, use_ambient: bool = True,
                  max_shots: int = 0, patch_size: float = 0.0, resolution: int = 64, **given: np.ndarray
                  ) -> dict[str, np.ndarray]:
-    """Solve and draw ``scene`` on the trusted patches and form factors (``given``) with the submission's R3-R5."""
+    """Draw ``scene`` on the trusted patches and form factors (``given``) with the submission's R5.
+
+    The per-patch values shown come from ``given["display"]`` when the test gives them (the reference's
+    R3 and R4), else from the submission's own R3 and R4.
+    """
     sc = parse_scene(scene, "<probe scene>")
     quads, parent = given["quads"], given["parent"]
     p = Patches(quads, parent, given["areas"], given["reflectance"], given["emission"], quads)
-    sol = solve_progressive(impl, MatrixRows(given["F"]), p.areas, p.reflectance, p.emission, tolerance, max_shots,
-                            1.0, use_ambient)
-    image = draw_solution(sc, impl, p, sol.display, (int(size[0]), int(size[1])), options(sc).exposure,
+    if "display" in given:
+        display = given["display"]
+    else:
+        display = solve_progressive(impl, MatrixRows(given["F"]), p.areas, p.reflectance, p.emission, tolerance,
+                                    max_shots, 1.0, use_ambient).display
+    image = draw_solution(sc, impl, p, display, (int(size[0]), int(size[1])), options(sc).exposure,
                           view=given.get("view"))
-    return {"image": np.clip(image * sc.image.exposure, 0.0, 1.0), "display": sol.display}
+    return {"image": np.clip(image * sc.image.exposure, 0.0, 1.0), "display": display}
 
 
 # --- the lecture demo: the solution building up shot by shot ---------------------------------
@@ -720,7 +742,7 @@ STAGE = Stage(
     render=render,
     probes={"subdivide": probe_subdivide, "shoot": probe_shoot, "progressive": probe_progressive,
             "ambient": probe_ambient, "vertex_colors": probe_vertex_colors, "system": probe_system,
-            "render": probe_render},
+            "solved_system": probe_solved_system, "render": probe_render},
     demo=_demo,
     builds_on=("hemicube",),
 )

@@ -16,10 +16,10 @@ import numpy as np
 
 from .. import schema
 from ..errors import KitError
-from ..gl import create_context
+from ..gl import compile_program, create_context
 from ..scene import Camera, DirectionalLight, PointLight, Scene, Sphere, parse_scene
 from ..schema import Context, field
-from .base import Stage, Task, as_array, student_call
+from .base import Stage, Task, as_array, functions_replaced, student_call
 
 MAX_LIGHTS = 8
 
@@ -151,12 +151,8 @@ class SphereRenderer:
                  task: str = "S4"):
         self.ctx = ctx
         vs, fs = shaders
-        try:
-            self.program = ctx.program(vertex_shader=GLSL_INTERFACE + VERTEX_INPUTS + vs,
-                                       fragment_shader=GLSL_INTERFACE + FRAGMENT_OUTPUT + fs)
-        except Exception as err:  # moderngl reports compile and link errors as plain Exceptions
-            first = next((ln for ln in str(err).splitlines() if "error" in ln.lower()), str(err).strip().splitlines()[0])
-            raise KitError(f"{task}: shader does not compile: {first.strip()}") from None
+        self.program = compile_program(ctx, task, (GLSL_INTERFACE + VERTEX_INPUTS, vs, ""),
+                                       (GLSL_INTERFACE + FRAGMENT_OUTPUT, fs, ""))
         self.vaos = []
         for positions, normals, triangles in meshes:
             vbo = ctx.buffer(np.hstack([positions, normals]).astype("f4").tobytes())
@@ -244,10 +240,44 @@ def probe_sphere_mesh(impl: Any, radius: float, slices: int, stacks: int) -> dic
     return {"positions": positions, "normals": normals, "triangles": triangles}
 
 
-def probe_reshape(impl: Any, width: int, height: int, camera: dict) -> dict[str, np.ndarray]:
+PERSPECTIVE_ARGS = ("fovy", "aspect", "near", "far")
+
+
+def probe_reshape(impl: Any, width: int, height: int, camera: dict, perspective_query: np.ndarray | None = None,
+                  perspective_answer: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    """The submission's S6. Given the reference's S1 answer (:func:`probe_reshape_parts`), a call of the
+    submission's S1 with the same arguments gets that answer, so that an S1 bug costs S1's points only."""
     cam = schema.parse_record(Camera, camera, Context("<probe>", "camera"))
-    viewport, projection = _reshape(impl, width, height, cam)
+    if perspective_query is None or perspective_answer is None:
+        viewport, projection = _reshape(impl, width, height, cam)
+    else:
+        def wrap(own: Any) -> Any:
+            def answered(*args: Any, **kwargs: Any) -> Any:
+                values = list(args) + [kwargs[k] for k in PERSPECTIVE_ARGS[len(args):] if k in kwargs]
+                try:
+                    same = len(values) == 4 and np.allclose(np.asarray(values, float), perspective_query, rtol=1e-12, atol=0)
+                except (TypeError, ValueError):
+                    same = False
+                return np.array(perspective_answer) if same else own(*args, **kwargs)
+            return answered
+        with functions_replaced(STAGE, impl, {"S1": wrap}):
+            viewport, projection = _reshape(impl, width, height, cam)
     return {"viewport": np.array(viewport), "projection": projection}
+
+
+def probe_reshape_parts(impl: Any, width: int, height: int, camera: dict) -> dict[str, np.ndarray]:
+    """Trusted input of a reshape test (run on the reference only): the call its S6 makes to S1, and the answer."""
+    calls: list = []
+
+    def wrap(own: Any) -> Any:
+        def recording(*args: Any) -> Any:
+            calls.append((args, own(*args)))
+            return calls[-1][1]
+        return recording
+    with functions_replaced(STAGE, impl, {"S1": wrap}):
+        probe_reshape(impl, width, height, camera)
+    args, answer = calls[0]
+    return {"perspective_query": np.asarray(args, dtype=np.float64), "perspective_answer": np.asarray(answer)}
 
 
 def probe_handle_key(impl: Any, presses: list[tuple[str, dict]]) -> dict[str, np.ndarray]:
@@ -303,6 +333,6 @@ def demo(module: Any, output: Path, window: bool, frames: int | None) -> list[Pa
 STAGE = Stage(
     name="sphere", number=1, title="The lit sphere", handout="01-sphere", tasks=TASKS, render=render,
     probes={"perspective": probe_perspective, "look_at": probe_look_at, "sphere_mesh": probe_sphere_mesh,
-            "reshape": probe_reshape, "handle_key": probe_handle_key, "parts": probe_parts, "render": probe_render},
+            "reshape": probe_reshape, "reshape_parts": probe_reshape_parts, "handle_key": probe_handle_key, "parts": probe_parts, "render": probe_render},
     demo=demo,
 )

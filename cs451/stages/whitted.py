@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -17,7 +17,7 @@ from .. import raytrace, schema
 from ..errors import KitError
 from ..scene import Camera, Scene, parse_scene
 from ..schema import Context, field
-from .base import Stage, Task, as_array, student_call
+from .base import Stage, Task, as_array, functions_replaced, student_call
 
 TASKS = (
     Task("W1", "camera_rays", "Camera rays", ("camera", "width", "height")),
@@ -73,12 +73,18 @@ def _build_bvh(impl: Any, lo: np.ndarray, hi: np.ndarray) -> dict[str, np.ndarra
 
 
 def prepare(scene: Scene, impl: Any, max_depth: int | None = None, min_weight: float | None = None,
-            light_samples: int | None = None, hierarchy: bool | None = None) -> raytrace.TraceScene:
-    """The scene as arrays, with the submission's hierarchy where it can pay off (or where ``hierarchy``)."""
+            light_samples: int | None = None, hierarchy: bool | None = None,
+            bvh: dict[str, np.ndarray] | None = None) -> raytrace.TraceScene:
+    """The scene as arrays, with the submission's hierarchy where it can pay off (or where ``hierarchy``).
+
+    ``bvh``: a trusted hierarchy (the reference's, from the grader) to use instead of the submission's W4.
+    """
     opts = options(scene, max_depth=max_depth, min_weight=min_weight, light_samples=light_samples)
     ts = raytrace.build(scene, opts.max_depth, opts.min_weight, opts.light_samples or None)
     use = hierarchy if hierarchy is not None else ts.n_bounded > raytrace.HIERARCHY_THRESHOLD
-    if use and ts.n_bounded > 0:
+    if bvh is not None:
+        ts.bvh = {k: np.asarray(bvh[k]) for k in raytrace.BVH_KEYS}
+    elif use and ts.n_bounded > 0:
         lo, hi = ts.bounds()
         bvh = _build_bvh(impl, lo, hi)
         problems = raytrace.bvh_problems(bvh, lo, hi)
@@ -104,6 +110,112 @@ def render_traced(scene: Scene, impl: Any, size: tuple[int, int] | None = None, 
 def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, **opts: Any) -> np.ndarray:
     """Render a scene with a submission's tracer: a linear float image (h, w, 3)."""
     return render_traced(scene, impl, size, **opts)[0]
+
+
+# --- trusted parts for the tests of later tasks ---------------------------------------
+#
+# A test of W5 or W11 should judge that task, not the earlier ones it calls. The grader runs the
+# reference first (through ``given``) and hands the submission arrays: the camera rays, the
+# reference's hierarchy, and the reference's answers to reflect, refract and fresnel for the
+# queries its own trace made. While the submission's trace runs, its W8 to W10 are answered from
+# those arrays wherever it asks what the reference asked (a correct trace asks exactly that), and
+# left to the submission's own functions elsewhere: a bug in W8 then costs W8's points only.
+
+BVH_GIVEN = {k: f"bvh_{k}" for k in raytrace.BVH_KEYS}
+#: Per optics task: the per-ray arrays of a query and of its answer (given as answer_<function>_<name>),
+#: and whether each holds a vector (3 columns) per ray.
+OPTICS = {"W8": ((("d", 3), ("n", 3)), (("r", 3),)), "W9": ((("d", 3), ("n", 3), ("eta", 1)), (("t", 3), ("tir", 1))),
+          "W10": ((("cos", 1), ("eta", 1)), (("f", 1),))}
+#: Queries match when they agree to this, after rounding: far above the rounding of a correct trace's rays.
+ANSWER_DIGITS = 1e-9
+
+
+def _given_bvh(given: dict[str, np.ndarray]) -> dict[str, np.ndarray] | None:
+    if not all(name in given for name in BVH_GIVEN.values()):
+        return None
+    return {k: given[name] for k, name in BVH_GIVEN.items()}
+
+
+def _query(task: str, args: tuple) -> tuple[np.ndarray, list[np.ndarray]]:
+    """One row per ray of what an optics call asks, as floats (the key), and the arguments broadcast per ray.
+
+    Raises ValueError for a call that is not a batch of rays as the interface has it ((n,) or (n, 3) arrays).
+    """
+    if task == "W10":
+        cos = np.asarray(args[0], dtype=np.float64)
+        if cos.ndim != 1:
+            raise ValueError("not a batch")
+        eta = np.broadcast_to(np.asarray(args[1], dtype=np.float64), cos.shape)
+        return np.column_stack([cos, eta]), [cos, eta]
+    d = np.asarray(args[0], dtype=np.float64)
+    n = np.asarray(args[1], dtype=np.float64)
+    if d.ndim != 2 or d.shape[1:] != (3,) or n.shape != d.shape:
+        raise ValueError("not a batch")
+    if task == "W8":  # the mirror direction is the same about -n: key the normal facing the ray
+        facing = np.where((np.einsum("ij,ij->i", d, n) > 0)[:, None], -n, n)
+        return np.column_stack([d, facing]), [d, n]
+    eta = np.broadcast_to(np.asarray(args[2], dtype=np.float64), (len(d),))
+    return np.column_stack([d, n, eta]), [d, n, eta]
+
+
+def _keys(rows: np.ndarray) -> list[bytes]:
+    return [r.tobytes() for r in np.round(rows / ANSWER_DIGITS).astype(np.int64)]
+
+
+class _Answers:
+    """The reference's answers to one optics task, looked up by query."""
+
+    def __init__(self, task: str, queries: list[np.ndarray], answers: list[np.ndarray]):
+        self.task, self.answers = task, answers
+        self.index = {k: i for i, k in enumerate(_keys(_query(task, tuple(queries))[0]))}
+
+    def wrap(self, own: Any) -> Any:
+        def answered(*args: Any) -> Any:
+            try:
+                query, per_ray = _query(self.task, args)
+            except (TypeError, ValueError, IndexError):
+                return own(*args)               # not a batch of rays: the submission's own answer
+            found = np.array([self.index.get(k, -1) for k in _keys(query)], dtype=np.int64)
+            missing = found < 0
+            parts = [a[found[~missing]] for a in self.answers]
+            if missing.any():                   # rays the reference never cast: the submission's own function
+                mine = own(*[a[missing] for a in per_ray])
+                mine = mine if isinstance(mine, (tuple, list)) else (mine,)
+                parts = [_merge(p, np.asarray(m), missing) for p, m in zip(parts, mine)]
+            return tuple(parts) if len(parts) > 1 else parts[0]
+        return answered
+
+
+def _merge(found: np.ndarray, mine: np.ndarray, missing: np.ndarray) -> np.ndarray:
+    out = np.zeros((len(missing),) + found.shape[1:], dtype=np.result_type(found, mine))
+    out[~missing], out[missing] = found, mine
+    return out
+
+
+def _answer_names(task: str) -> tuple[list[str], list[str]]:
+    name = STAGE.task(task).function
+    queries, results = OPTICS[task]
+    return [f"answer_{name}_{q}" for q, _ in queries], [f"answer_{name}_{r}" for r, _ in results]
+
+
+def _answers_from(given: dict[str, np.ndarray]) -> dict[str, _Answers]:
+    out = {}
+    for task in OPTICS:
+        queries, results = _answer_names(task)
+        if all(k in given for k in queries + results):
+            out[task] = _Answers(task, [given[k] for k in queries], [np.asarray(given[k]) for k in results])
+    return out
+
+
+def _recorder(task: str, log: dict[str, list]) -> Callable[[Any], Any]:
+    def wrap(own: Any) -> Any:
+        def recording(*args: Any) -> Any:
+            out = own(*args)
+            _, per_ray = _query(task, args)
+            log[task].append((per_ray, out if isinstance(out, (tuple, list)) else (out,)))
+            return out
+        return recording
+    return wrap
 
 
 # --- probes: what the autograder's worker asks a submission for ------------------
@@ -182,11 +294,40 @@ def probe_primary_rays(impl: Any, scene: dict, size: list[int], **_: Any) -> dic
     return {"origins": origins, "directions": directions}
 
 
+def probe_hit_parts(impl: Any, scene: dict, size: list[int] | None = None, hierarchy: bool | None = None,
+                    rays: dict | None = None, **opts: Any) -> dict[str, np.ndarray]:
+    """Trusted inputs of a W5 or W11 test (run on the reference only): camera rays, and the reference's
+    hierarchy where the scene gets one."""
+    ts = prepare(_scene(scene), impl, hierarchy=hierarchy, **opts)
+    out = probe_primary_rays(impl, scene, size) if size is not None else {}
+    if ts.bvh is not None:
+        out.update({BVH_GIVEN[k]: np.asarray(v) for k, v in ts.bvh.items()})
+    return out
+
+
+def probe_trace_parts(impl: Any, scene: dict, size: list[int], **opts: Any) -> dict[str, np.ndarray]:
+    """Trusted inputs of a W11 test (run on the reference only): those of :func:`probe_hit_parts`, and every
+    query the reference's trace put to reflect, refract and fresnel on this scene, with its answers."""
+    out = probe_hit_parts(impl, scene, size, **opts)
+    log: dict[str, list] = {task: [] for task in OPTICS}
+    with functions_replaced(STAGE, impl, {task: _recorder(task, log) for task in OPTICS}):
+        probe_render(impl, scene, size, **opts, **out)
+    for task, (queries, results) in OPTICS.items():
+        query_names, result_names = _answer_names(task)
+        for side, spec, names in ((0, queries, query_names), (1, results, result_names)):
+            for k, ((_, columns), name) in enumerate(zip(spec, names)):
+                parts = [np.asarray(call[side][k]).reshape(-1, columns) for call in log[task]]
+                array = np.concatenate(parts) if parts else np.zeros((0, columns))
+                out[name] = array if columns == 3 else array.reshape(-1)
+    return out
+
+
 def probe_closest_hit(impl: Any, scene: dict, size: list[int] | None = None, hierarchy: bool | None = None,
                       rays: dict | None = None, origins: np.ndarray | None = None,
-                      directions: np.ndarray | None = None) -> dict[str, np.ndarray]:
-    """Closest hits of the given rays (``rays`` in the parameters, or trusted camera rays as inputs)."""
-    ts = prepare(_scene(scene), impl, hierarchy=hierarchy)
+                      directions: np.ndarray | None = None, **given: np.ndarray) -> dict[str, np.ndarray]:
+    """Closest hits of the given rays (``rays`` in the parameters, or trusted camera rays as inputs), through
+    the trusted hierarchy when the test gives one."""
+    ts = prepare(_scene(scene), impl, hierarchy=hierarchy, bvh=_given_bvh(given))
     if rays is not None:
         origins, directions = _rays(rays["origins"], "origins"), _rays(rays["directions"], "directions")
     assert origins is not None and directions is not None
@@ -240,13 +381,17 @@ def probe_fresnel(impl: Any, cos_i: list, eta: Any) -> dict[str, np.ndarray]:
 
 def probe_render(impl: Any, scene: dict, size: list[int], origins: np.ndarray | None = None,
                  directions: np.ndarray | None = None, **opts: Any) -> dict[str, np.ndarray]:
-    """Trace a scene; camera rays come in trusted (from the reference) when the test gives them."""
+    """Trace a scene with the submission's W11. Trusted parts (:func:`probe_trace_parts`) come in as arrays when
+    the test gives them: the camera rays, the reference's hierarchy, and answers for reflect, refract and fresnel."""
+    given = {k: opts.pop(k) for k in list(opts) if k.startswith(("bvh_", "answer_"))}
     sc = _scene(scene)
     width, height = size
-    ts = prepare(sc, impl, **opts)
+    ts = prepare(sc, impl, bvh=_given_bvh(given), **opts)
     if origins is None or directions is None:
         origins, directions = _camera_rays(impl, sc.camera, width, height)
-    colours = as_array(student_call(STAGE, impl, "W11", ts, origins, directions), (len(origins), 3), "W11 trace()")
+    answers = _answers_from(given)
+    with functions_replaced(STAGE, impl, {task: a.wrap for task, a in answers.items()}):
+        colours = as_array(student_call(STAGE, impl, "W11", ts, origins, directions), (len(origins), 3), "W11 trace()")
     out = {"image": colours.reshape(height, width, 3)}
     out.update({k: np.array(v) for k, v in ts.counters.items()})
     return out
@@ -256,7 +401,8 @@ STAGE = Stage(
     name="whitted", number=2, title="Whitted ray tracing", handout="02-whitted", tasks=TASKS, render=render,
     probes={"camera_rays": probe_camera_rays, "intersect_sphere": probe_intersect_sphere,
             "intersect_triangle": probe_intersect_triangle, "build_bvh": probe_build_bvh,
-            "primary_rays": probe_primary_rays, "closest_hit": probe_closest_hit, "local_shading": probe_local_shading,
+            "primary_rays": probe_primary_rays, "hit_parts": probe_hit_parts, "trace_parts": probe_trace_parts,
+            "closest_hit": probe_closest_hit, "local_shading": probe_local_shading,
             "shadow_transmission": probe_shadow_transmission, "reflect": probe_reflect, "refract": probe_refract,
             "fresnel": probe_fresnel, "render": probe_render},
 )

@@ -13,10 +13,11 @@ def point_polygon_form_factor(point, normal, polygon):
         F = 1/(2π) · | Σ_k θ_k  normal · (r_k × r_{k+1}) / |r_k × r_{k+1}| |,
 
     θ_k being the angle between r_k and r_{k+1}. The kit clips the polygon to the
-    half-space in front of the point before calling. Repeated corners (a triangle
-    stored as a quad) contribute nothing. Returns a float.
+    half-space in front of the point before calling. An edge whose |r_k × r_{k+1}| is at
+    most 1e-300 (a repeated corner, as a triangle stored as a quad has) contributes
+    nothing. Returns a float.
     """
-    # BEGIN SOLUTION H6: sum θ_k n·γ_k over the edges, skipping zero-length ones, and divide by 2π (handout §H6)
+    # BEGIN SOLUTION H6: sum θ_k n·γ_k over the edges (γ_k the unit r_k × r_k+1), skip edges whose cross product is 0, divide by 2π (handout §H6)
     p = np.asarray(point, dtype=np.float64)
     n = np.asarray(normal, dtype=np.float64)
     r = np.asarray(polygon, dtype=np.float64) - p

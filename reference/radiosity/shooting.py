@@ -36,14 +36,16 @@ def progressive_refinement(row: Callable[[int], np.ndarray], areas: np.ndarray, 
                            on_shot: Callable | None) -> tuple:
     """Solve for the radiosities by shooting, always from the patch with the most unshot energy.
 
-    Start with B = ΔB = E. Repeatedly pick the patch i with the largest unshot energy
-    ``|ΔB_i|·A_i`` (summed over the three channels; ties go to the lower index), using a max-heap
-    built with :mod:`heapq`, fetch its form factors with ``row(i)`` and shoot (R2). Stop when the
-    total unshot energy ``Σ_j |ΔB_j|·A_j`` (all channels) is at most ``tolerance`` times the total
-    emitted energy ``Σ_j E_j·A_j``, or after ``max_shots`` shots.
+    Start with B = ΔB = E. Repeatedly pick the patch i with the largest unshot energy, its key
+    ``(|ΔB_i,r| + |ΔB_i,g| + |ΔB_i,b|)·A_i`` (channels summed, then times the area; ties go to the
+    lower index), using a max-heap built with :mod:`heapq`, fetch its form factors with ``row(i)``
+    and shoot (R2). Before every shot, stop when the total unshot energy (the keys' sum) is at most
+    ``tolerance`` times the total emitted energy ``Σ_j (E_j,r + E_j,g + E_j,b)·A_j``, or when
+    ``max_shots`` shots are done.
 
     ``overshoot`` ω (1 = plain shooting) shoots ω·ΔB_i instead and leaves ΔB_i = (1 − ω)·ΔB_i.
-    If ``on_shot`` is not None, call ``on_shot(shots, i, radiosity, unshot)`` after every shot.
+    If ``on_shot`` is not None, call ``on_shot(shots, i, radiosity, unshot)`` after every shot:
+    ``shots`` counts the shots so far, this one included, and the arrays are those after it.
 
     Returns ``(radiosity, unshot, order)``: B (n, 3), ΔB (n, 3) and the patches shot, in order (list of int).
     """
@@ -86,8 +88,9 @@ def progressive_refinement(row: Callable[[int], np.ndarray], areas: np.ndarray, 
 def ambient_term(areas: np.ndarray, reflectance: np.ndarray, unshot: np.ndarray) -> np.ndarray:
     """The 1988 paper's ambient term, for previews: (3,), one value per channel.
 
-    ρ_avg = Σ ρ_j A_j / Σ A_j, R = 1 / (1 − ρ_avg), ambient = R · Σ ΔB_j A_j / Σ A_j.
-    The preview shows B_j + ρ_j · ambient.
+    ρ_avg = Σ ρ_j A_j / Σ A_j, R = 1 / (1 − ρ_avg), ambient = R · Σ ΔB_j A_j / Σ A_j, with ΔB
+    signed as it is (negative after overshooting). The preview shows B_j + ρ_j · ambient. The
+    kit never calls this where ρ_avg = 1.
     """
     # BEGIN SOLUTION R4: area-weighted averages of the reflectance and of the unshot radiosity (handout §R4)
     total = areas.sum()

@@ -50,8 +50,8 @@ def reshape(width: int, height: int, camera) -> tuple:
     """The GLUT reshape callback: the viewport and a projection that keeps the aspect ratio.
 
     ``camera`` has ``fovy``, ``near`` and ``far``. Returns ``((x, y, w, h), projection)``
-    where the viewport covers the whole window and ``projection`` is (4, 4).
-    A window may be minimised to a height of 0: do not divide by zero.
+    where the viewport covers the whole window and ``projection`` is (4, 4), from your
+    ``perspective`` (S1). A window may be minimised to a height of 0: do not divide by zero.
     """
     # BEGIN SOLUTION S6: cover the window, and use its aspect ratio in the projection (handout §S6)
     height = max(int(height), 1)

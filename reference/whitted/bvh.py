@@ -14,7 +14,7 @@ import numpy as np
 
 from cs451.raytrace import TraceScene
 
-LEAF_SIZE = 4
+LEAF_SIZE = 4   # split every node of more primitives than this; a leaf may hold at most 8 (handout §W4)
 # BEGIN SOLUTION
 #: Batches at least this large go to the compiled kernels (kernels.py); smaller ones, to plain numpy
 #: (wavefront.py), where compiling would cost more than it saves.

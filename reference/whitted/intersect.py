@@ -11,9 +11,10 @@ import numpy as np
 def intersect_sphere(origins: np.ndarray, directions: np.ndarray, center, radius: float) -> tuple[np.ndarray, np.ndarray]:
     """Both ray parameters where rays (n, 3) meet the sphere, smaller first: ``(t0, t1)``, each (n,).
 
-    ``directions`` need not be unit length. Where a ray misses, both are ``inf``. Negative
-    values are returned as they are (a ray that starts inside has t0 < 0 < t1). Must stay
-    accurate for a small sphere far away (no cancellation in the quadratic).
+    ``center`` is the sphere's centre, ``radius`` its radius; ``directions`` need not be unit
+    length. Where a ray misses, both are ``inf``. Negative values are returned as they are (a ray
+    that starts inside has t0 < 0 < t1), and t0 <= t1 always. Must stay accurate for a small
+    sphere far away (no cancellation in the quadratic: the handout's stable form).
     """
     # BEGIN SOLUTION W2: the quadratic in the stable form of Ray Tracing Gems ch. 7 (handout §W2)
     o = np.asarray(origins, dtype=np.float64)
@@ -41,7 +42,8 @@ def intersect_triangle(origins: np.ndarray, directions: np.ndarray, v0: np.ndarr
 
     All inputs are (n, 3). Only hits with t > 0 count. Watertight: a ray through an edge or a
     vertex shared by two triangles hits at least one of them. A degenerate (zero-area)
-    triangle is never hit.
+    triangle, such as one with a repeated corner, is never hit: its edge functions sum to
+    exactly 0.
     """
     # BEGIN SOLUTION W3: the watertight test of Woop, Benthin and Wald (2013), as in pbrt-v4 (handout §W3)
     o = np.asarray(origins, dtype=np.float64)

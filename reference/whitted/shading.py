@@ -32,9 +32,10 @@ def shadow_transmission(scene: TraceScene, origins: np.ndarray, targets: np.ndar
     """How much light gets from each target (a light) to each origin (n, 3): an RGB factor (n, 3) in [0, 1].
 
     Shadow rays run from ``origins`` (already moved off their surface) toward ``targets``.
-    Every surface crossed strictly between them multiplies the factor by its material's
-    ``transmittance``: an opaque one (transmittance 0) blocks the light, a glass one only
-    dims it (a sphere is crossed twice). Any hit ends the search for an opaque blocker:
+    Every surface crossed strictly between them multiplies the factor by the ``transmittance``
+    of the material at the crossing point (``scene.material_at``: a checkerboard's squares
+    differ): an opaque one (transmittance 0) blocks the light, a glass one only dims it (a
+    sphere is crossed twice). Any hit ends the search for an opaque blocker:
     no need for the closest one. Adds the rays to ``scene.counters["shadow"]``.
     """
     # BEGIN SOLUTION W7: any-hit traversal that multiplies transmittances and stops at an opaque blocker (handout §W7)

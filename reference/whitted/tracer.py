@@ -2,9 +2,10 @@
 
 A ray carries a weight β (RGB): what its colour contributes to its pixel. The
 camera rays start with β = 1; a reflected ray's β is the parent's times the
-reflectance, a transmitted ray's the parent's times the transmittance. A ray is
-not cast when its β falls below ``scene.min_weight`` (the cut-off) or past
-``scene.max_depth`` bounces.
+reflectance, a transmitted ray's the parent's times the transmittance. Camera rays
+have depth 0, and a ray cast at a hit of a depth-k ray depth k + 1: it is cast only
+where the max over RGB of its β is at least ``scene.min_weight`` (the cut-off) and
+its depth at most ``scene.max_depth``.
 """
 from __future__ import annotations
 

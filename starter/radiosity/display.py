@@ -9,8 +9,9 @@ def vertex_colors(quads: np.ndarray, parent: np.ndarray, radiosity: np.ndarray) 
 
     ``quads`` (m, 4, 3) patches, ``parent`` (m,) int the polygon each patch came from (R1),
     ``radiosity`` (m, 3) one colour per patch. Two patch corners are the same vertex when they
-    belong to patches of the same polygon and lie at the same point (within 1e-9 of the scene's
-    size); corners of different polygons are never merged, so creases between walls stay sharp.
+    belong to patches of the same polygon and lie at the same point, within 1e-9 of the scene's
+    size (the largest extent, over x, y and z, of the box around all the corners); corners of
+    different polygons are never merged, so creases between walls stay sharp.
     A vertex's colour is the plain average of the radiosities of the distinct patches that have
     it as a corner.
 
