@@ -28,6 +28,9 @@ import numpy as np
 from cs451.impl import load_impl, resolve_impl
 from cs451.scene import load_scene
 from cs451.stages import radiosity as R
+from cs451 import solvers as S
+from cs451 import patching as P
+from cs451 import drawing as D
 
 #: (scene, patch sizes) for the full and the quick run
 CASES = {False: [("cornell-box", [140.0, 100.0, 70.0, 50.0]), ("room", [0.5, 0.35, 0.25])],
@@ -77,9 +80,9 @@ def run_case(ref: Any, scene_name: str, patch_size: float, resolution: int) -> d
     # every method pays the same price per row, the cheaper of the two ways: only the number of rows differs
     row_seconds = min(lazy_seconds, batched_seconds / n)
     ff_seconds = n * row_seconds
-    Fs = R.shooting_matrix(F, a)
+    Fs = S.shooting_matrix(F, a)
     start = time.perf_counter()
-    truth = R.solve_direct(Fs, rho, E)
+    truth = S.solve_direct(Fs, rho, E)
     direct_seconds = time.perf_counter() - start
     out: dict[str, Any] = {"scene": scene_name, "patch_size": patch_size, "patches": n, "resolution": resolution,
                            "formfactor_seconds_all_rows_batched": batched_seconds,
@@ -88,7 +91,7 @@ def run_case(ref: Any, scene_name: str, patch_size: float, resolution: int) -> d
     out["methods"]["direct"] = {"curve": [(ff_seconds + direct_seconds, 0.0, n)], "rows": n}
     # how well the truth itself is known: the same system on independently rotated hemicubes
     other = R.hemicube_formfactors(patches.quads, resolution, opts.proximity, seed=1).matrix()
-    out["formfactor_noise"] = relative_error(R.solve_direct(R.shooting_matrix(other, a), rho, E), truth, a, mask)
+    out["formfactor_noise"] = relative_error(S.solve_direct(S.shooting_matrix(other, a), rho, E), truth, a, mask)
 
     for method in ("jacobi", "gauss-seidel"):
         curve: list[tuple[float, float, int]] = [(ff_seconds, relative_error(E, truth, a, mask), n)]
@@ -102,11 +105,11 @@ def run_case(ref: Any, scene_name: str, patch_size: float, resolution: int) -> d
             last[0] = time.perf_counter()
 
         last[0] = time.perf_counter()
-        R.solve_iterative(method, Fs, a, rho, E, tolerance=1e-5, max_sweeps=500, on_sweep=on_sweep)
+        S.solve_iterative(method, Fs, a, rho, E, tolerance=1e-5, max_sweeps=500, on_sweep=on_sweep)
         out["methods"][method] = {"curve": curve, "rows": n}
 
     for label, use_ambient, overshoot in VARIANTS:
-        rows = R.MatrixRows(F)                                  # the same rows, counted as they are first asked for
+        rows = S.MatrixRows(F)                                  # the same rows, counted as they are first asked for
         checkpoints = set(int(round(x)) for x in np.geomspace(1, 200 * n, 120))
         curve = [(0.0, relative_error(E + (rho * R.call_ambient(ref, a, rho, E) if use_ambient else 0), truth, a, mask), 0)]
         excluded = [0.0]
@@ -156,9 +159,9 @@ def run_substructured(ref: Any, scene_name: str, patch_size: float, resolution: 
     start = time.perf_counter()
     F = engine.matrix()
     row_seconds = (time.perf_counter() - start) / len(elements)
-    truth = R.solve_direct(R.shooting_matrix(F, a), rho, E)
+    truth = S.solve_direct(S.shooting_matrix(F, a), rho, E)
     # every patch row rendered up front, so that the solve's clock holds the shooting alone; rows are charged per shooter
-    rows = R.MatrixRows(S.PatchToElementRows(engine, patches.quads, parent).matrix())
+    rows = S.MatrixRows(S.PatchToElementRows(engine, patches.quads, parent).matrix())
     curves: dict[str, list] = {}
     for label, use_ambient in (("substructured", False), ("substructured+ambient", True)):
         curve: list[tuple[float, float, int]] = []
@@ -196,12 +199,12 @@ WALLS = {"floor": [0], "ceiling": [1], "back": [2], "left (red)": [4], "right (g
 
 def polygon_ids(scene: Any, size: tuple[int, int]) -> np.ndarray:
     """Which polygon each pixel shows (-1: none), drawn with the kit's Gouraud drawer from the scene camera."""
-    quads, _, _, _ = R.scene_polygons(scene)
+    quads, _, _, _ = P.scene_polygons(scene)
     ids = np.arange(len(quads), dtype=np.float64)
     positions = quads.reshape(-1, 3)
     colors = np.repeat(np.column_stack([ids + 1, np.zeros((len(ids), 2))]), 4, axis=0)
     corners = np.arange(4 * len(quads)).reshape(-1, 4)
-    image = R.GouraudDrawer().draw(positions, colors, corners, R.camera_matrix(scene, *size), *size)
+    image = D.GouraudDrawer().draw(positions, colors, corners, D.camera_matrix(scene, *size, R.camera_view(scene)), *size)
     return np.round(image[..., 0]).astype(int) - 1
 
 
@@ -212,7 +215,7 @@ def mitsuba_cornell(scene: Any, size: tuple[int, int], spp: int, max_depth: int)
     import mitsuba as mi
 
     mi.set_variant("scalar_rgb")
-    quads, reflectance, radiosity, _ = R.scene_polygons(scene)
+    quads, reflectance, radiosity, _ = P.scene_polygons(scene)
     cam = scene.camera
     objects: dict[str, Any] = {"type": "scene", "integrator": {"type": "path", "max_depth": max_depth},
                                "sensor": {"type": "perspective", "fov_axis": "y", "fov": cam.fovy,
@@ -287,10 +290,10 @@ def furnace_figures(ref: Any, quick: bool) -> list[dict]:
     from autograder.radiosity import truth as T
 
     scene = load_scene("furnace")
-    cube, _, _, _ = R.scene_polygons(scene)
+    cube, _, _, _ = P.scene_polygons(scene)
     patches = R.make_patches(scene, ref, R.options(scene).patch_size)
-    cases = [("exact (Howell, 6 patches)", R.MatrixRows(T.cube_formfactors(patch_normals(cube))), patch_areas(cube)),
-             (f"hemicube 128, {len(patches)} patches", R.MatrixRows(
+    cases = [("exact (Howell, 6 patches)", S.MatrixRows(T.cube_formfactors(patch_normals(cube))), patch_areas(cube)),
+             (f"hemicube 128, {len(patches)} patches", S.MatrixRows(
                  R.hemicube_formfactors(patches.quads, 128, "none").matrix()), patches.areas)]
     out = []
     for label, rows, areas in cases:

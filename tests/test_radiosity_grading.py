@@ -76,12 +76,15 @@ def test04_one_broken_function_loses_its_task_and_what_calls_it(make_submission,
 
 
 def test05_demo_writes_frames_and_an_animation(tmp_path):
-    paths = R._demo(REF, tmp_path, window=False, frames=4, scene_name="furnace", size=(48, 48))
+    from cs451.stages._radiosity_demo import demo
+    paths = demo(REF, tmp_path, window=False, frames=4, scene_name="furnace", size=(48, 48))
     assert paths[0].name == "radiosity.gif" and len(paths) == 1 + 5          # 4 frames after shots, and the answer
     with Image.open(paths[0]) as gif:
         assert gif.n_frames == 5
     first, last = (np.asarray(Image.open(p), dtype=float) for p in (paths[1], paths[-1]))
-    assert first.shape == (48, 96, 3)
+    assert first.shape[0] > 48 and first.shape[1:] == (96, 3)       # the panels, and a caption strip under them
+    assert first[48:].std() > 10                                      # the caption says what the frame shows
+    first, last = first[:48], last[:48]
     # before any shot the furnace shows B = E (left) and the exact answer E/(1 - ρ) with the ambient term (right)
     assert first[:, 48:].mean() > first[:, :48].mean() + 20
     assert np.allclose(last[:, :48], last[:, 48:], atol=2)

@@ -24,7 +24,7 @@ from cs451.grading.checks import all_of, image_matches, sub
 from cs451.grading.spec import Test, check, truth
 from cs451.patches import patch_areas, patch_normals
 from cs451.scene import BUNDLED_DIR, load_scene
-from cs451.stages.radiosity import scene_polygons
+from cs451.patching import scene_polygons
 
 from autograder.radiosity import checks, truth as truths
 

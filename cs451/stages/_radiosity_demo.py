@@ -1,0 +1,90 @@
+"""Stage 4's demo: B beside B + ρ·ambient as the shots go by, in a window or as captioned frames and a GIF.
+
+Everything goes through the stage interface (the submission's R1, R3, R4 and R5), the shared
+window (:mod:`cs451.demos.window`) and frame writer (:mod:`cs451.demos.frames`). The window
+shows what the frames show: the scene's exposure and encoding (sRGB for the Cornell box) are
+applied as the panels are drawn, not left linear.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..demos.frames import write_frames
+from ..demos.window import Window
+from ..drawing import GouraudDrawer, camera_matrix
+from ..imageio import to_uint8
+from ..scene import load_scene
+from . import radiosity as R
+
+
+def demo_shots(total_hint: int, frames: int | None) -> list[int]:
+    """Shots after which to show a frame: 0, 1, 2, 4, 8, … (the picture changes fastest early on)."""
+    shots = [0] + [2 ** k for k in range(0, 40) if 2 ** k <= max(total_hint, 1)]
+    return shots[:frames] if frames else shots
+
+
+class _Stop(Exception):
+    """The window was closed, or showed its frames."""
+
+
+def demo(module: Any, output: Path, window: bool, frames: int | None, scene_name: str = "cornell-box",
+         size: tuple[int, int] = (256, 256)) -> list[Path]:
+    """Headless: frames (B alone | B + ρ·ambient) after 0, 1, 2, 4, … shots, as PNGs and one animated GIF."""
+    scene = load_scene(scene_name)
+    opts = R.options(scene)
+    calls = R.calls(module)
+    patches = R.make_patches(scene, module, opts.patch_size)
+    wanted = set(demo_shots(50 * len(patches), frames))
+    width, height = size
+    mvp = camera_matrix(scene, width, height, R.camera_view(scene))
+    a, rho = patches.areas, patches.reflectance
+    win = Window(2 * width, height, "cs451 radiosity: B | B + ambient (q quits)") if window else None
+    drawer = GouraudDrawer(win.ctx if win else None)
+    rows = R.hemicube_formfactors(patches.quads, opts.resolution, opts.proximity, ctx=drawer.ctx, batch=1)
+    encoding = (scene.image.exposure, scene.image.srgb)
+    pictures: list[np.ndarray] = []
+    captions: list[str] = []
+
+    def panels(B: np.ndarray, dB: np.ndarray) -> list[np.ndarray]:
+        out = []
+        for k, values in enumerate((B, B + rho * calls.ambient(a, rho, dB))):
+            positions, colors, corners = calls.vertex_colors(patches.quads, patches.parent, values)
+            scaled = colors * (opts.exposure / math.pi)
+            if win is not None:
+                drawer.draw(positions, scaled, corners, mvp, width, height, scene.image.background, win.ctx.screen,
+                            viewport=(k * width, 0, width, height), encoding=encoding)
+            else:
+                out.append(drawer.draw(positions, scaled, corners, mvp, width, height, scene.image.background))
+        return out
+
+    def show(shots: int, B: np.ndarray, dB: np.ndarray, last: bool = False) -> None:
+        if win is None:
+            pictures.append(np.hstack(panels(B, dB)))
+            captions.append(f"{'the answer: ' if last else ''}{shots} shots — left: B, right: B + ρ·ambient")
+            return
+        win.keys()
+        win.show(lambda: panels(B, dB))
+        if win.done(frames):
+            raise _Stop
+
+    try:
+        show(0, patches.emission.copy(), patches.emission.copy())
+        sol = R.solve_progressive(module, rows, a, rho, patches.emission, opts.tolerance, opts.max_shots, opts.overshoot,
+                                  True, lambda shots, i, B, dB: show(shots, B, dB) if shots in wanted else None)
+        if win is None:
+            show(len(sol.order), sol.radiosity, sol.unshot, last=True)
+        else:                                       # the answer stays up until the window is closed
+            while True:
+                show(len(sol.order), sol.radiosity, sol.unshot)
+    except _Stop:
+        pass
+    finally:
+        if win is not None:
+            win.close()
+    if win is not None:
+        return []
+    return write_frames(output, "radiosity", [to_uint8(p, *encoding) for p in pictures], captions)
