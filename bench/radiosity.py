@@ -59,7 +59,7 @@ def first_below(curve: list[tuple[float, float, int]], target: float) -> tuple[f
 
 def run_case(ref: Any, scene_name: str, patch_size: float, resolution: int) -> dict:
     scene = load_scene(scene_name)
-    opts = R.options(scene, patch_size=patch_size, resolution=resolution)
+    opts = R.STAGE.options(scene, patch_size=patch_size, resolution=resolution)
     patches = R.make_patches(scene, ref, patch_size)
     a, rho, E = patches.areas, patches.reflectance, patches.emission
     n = len(patches)
@@ -291,7 +291,7 @@ def furnace_figures(ref: Any, quick: bool) -> list[dict]:
 
     scene = load_scene("furnace")
     cube, _, _, _ = P.scene_polygons(scene)
-    patches = R.make_patches(scene, ref, R.options(scene).patch_size)
+    patches = R.make_patches(scene, ref, R.STAGE.options(scene).patch_size)
     cases = [("exact (Howell, 6 patches)", S.MatrixRows(T.cube_formfactors(patch_normals(cube))), patch_areas(cube)),
              (f"hemicube 128, {len(patches)} patches", S.MatrixRows(
                  R.hemicube_formfactors(patches.quads, 128, "none").matrix()), patches.areas)]

@@ -18,7 +18,6 @@ import tempfile
 from pathlib import Path
 from types import ModuleType
 
-import numpy as np
 
 from cs451.progress import Progress
 from cs451.scene import load_scene

@@ -90,23 +90,28 @@ def scene_polygons(scene: Any) -> tuple[np.ndarray, list[str], np.ndarray]:
     each area light becomes one emitting quad (corner, +u, +u+v, +v), whose front
     faces ``edge_u × edge_v`` as the scene schema says, with material name
     ``"light"`` and emission = its radiance. Polygons' emission is their
-    material's ``emission``. Spheres, planes and meshes are not patches and are skipped.
+    material's ``emission``. Any other kind (a sphere, a plane, a mesh, a point light) is not a patch and is
+    refused, naming it, rather than left out of the energy balance unseen.
     """
     from .scene import AreaLight, Polygon  # local: keep this module cheap to import
 
     quads, names, emission = [], [], []
-    for obj in scene.objects:
-        if isinstance(obj, Polygon):
-            q = polygon_to_quads(obj.vertices)
-            quads.append(q)
-            names += [obj.material] * len(q)
-            emission += [tuple(scene.material(obj.material).emission)] * len(q)
-    for light in scene.lights:
-        if isinstance(light, AreaLight):
-            c, u, v = (np.asarray(x, dtype=np.float64) for x in (light.corner, light.edge_u, light.edge_v))
-            quads.append(np.array([[c, c + u, c + u + v, c + v]]))
-            names.append("light")
-            emission.append(tuple(light.radiance))
+    for k, obj in enumerate(scene.objects):
+        if not isinstance(obj, Polygon):
+            raise KitError(f"{scene.label}: objects[{k}]: patches are made of polygons and area lights, "
+                           f"not of a {type(obj).__name__}")
+        q = polygon_to_quads(obj.vertices)
+        quads.append(q)
+        names += [obj.material] * len(q)
+        emission += [tuple(scene.material(obj.material).emission)] * len(q)
+    for k, light in enumerate(scene.lights):
+        if not isinstance(light, AreaLight):
+            raise KitError(f"{scene.label}: lights[{k}]: patches are made of polygons and area lights, "
+                           f"not of a {type(light).__name__}")
+        c, u, v = (np.asarray(x, dtype=np.float64) for x in (light.corner, light.edge_u, light.edge_v))
+        quads.append(np.array([[c, c + u, c + u + v, c + v]]))
+        names.append("light")
+        emission.append(tuple(light.radiance))
     if not quads:
-        raise KitError(f"{scene.source or scene.name or '<scene>'}: objects: no polygons or area lights to make patches of")
+        raise KitError(f"{scene.label}: objects: no polygons or area lights to make patches of")
     return np.concatenate(quads), names, np.asarray(emission, dtype=np.float64).reshape(-1, 3)

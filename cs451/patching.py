@@ -104,5 +104,5 @@ def make_patches(scene: Any, subdivide: Callable[[np.ndarray, float], tuple[np.n
     quads, reflectance, emission, labels = scene_polygons(scene)
     patches, parent = subdivide(quads, patch_size)
     p = Patches(patches, parent, patch_areas(patches), reflectance[parent], emission[parent], quads, labels)
-    check_patches(p, scene.source or scene.name or "<scene>")
+    check_patches(p, scene.label)
     return p

@@ -217,7 +217,7 @@ def _read_mesh(path: Path, where: str) -> tuple[np.ndarray, np.ndarray]:
 def build(scene: Any, max_depth: int = 5, min_weight: float = 0.01, light_samples: int | None = None) -> TraceScene:
     """The arrays of ``scene`` (a validated Scene). ``light_samples`` overrides every area light's count."""
     from .scene import AreaLight, DirectionalLight, Mesh, PointLight, Plane, Polygon, Sphere
-    label = scene.source or scene.name or "<scene>"
+    label = scene.label
     names = ["default"] + sorted(k for k in scene.materials if k != "default")
     index = {n: i for i, n in enumerate(names)}
     mats = [scene.material(n) for n in names]
@@ -271,8 +271,8 @@ def build(scene: Any, max_depth: int = 5, min_weight: float = 0.01, light_sample
             for s, t in uv:
                 pos = np.asarray(light.corner) + s * eu + t * ev
                 light_rows.append((tuple(pos), tuple(power), tuple(power), (0.0, 0.0, 1.0), tuple(normal)))
-        elif isinstance(light, DirectionalLight):
-            raise KitError(f"{label}: lights[{i}]: stage 2 traces point and area lights, not directional ones")
+        else:
+            raise KitError(f"{label}: lights[{i}]: stage 2 traces point and area lights, not a {type(light).__name__}")
 
     def arr(rows, width=3):
         return np.asarray(rows, np.float64).reshape(-1, width)

@@ -38,6 +38,7 @@ def render_scene(*, scene: str, output: str | Path, impl: str = "reference", siz
     from .copy import student_stage
     sc = load_scene(scene)
     st = get_stage(stage or student_stage() or infer_stage(sc))
+    st.check_scene(sc)
     module = load_impl(resolve_impl(impl, st.name), st.name)
     start = time.perf_counter()
     kwargs = {"shading": shading} if shading else {}

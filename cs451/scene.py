@@ -186,6 +186,13 @@ class Scene:
     def material(self, name: str) -> Material:
         return self.materials.get(name, Material())
 
+    @property
+    def label(self) -> str:
+        """What messages call the scene: a bundled scene by its name, another by its file, else its name."""
+        if self.source and Path(self.source).parent == BUNDLED_DIR:
+            return f"{Path(self.source).stem} (bundled scene)"
+        return self.source or self.name or "<scene>"
+
 
 def bundled_scenes() -> list[str]:
     """Names of the scenes shipped with the kit."""

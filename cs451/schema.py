@@ -1,8 +1,8 @@
 """Declarative parsing of JSON into frozen dataclasses.
 
 Each field is described once, in its dataclass, with ``field(doc=..., check=...)``.
-The same descriptions feed validation errors and the handout's scene reference
-(:func:`describe`). Unknown keys are errors, as in trimesh's schemas
+The same descriptions feed validation errors and :func:`describe`, a field
+reference of a record written from them. Unknown keys are errors, as in trimesh's schemas
 (``additionalProperties: false``): a typo must never be silently ignored.
 """
 from __future__ import annotations

@@ -12,7 +12,6 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-from cs451 import KIT_ROOT
 from cs451.stages import get_stage
 
 #: Each task's least answer of the right form, as the body of its function.

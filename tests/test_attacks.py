@@ -25,6 +25,7 @@ import pytest
 from cs451 import KIT_ROOT
 from cs451.grading import sandbox
 from cs451.grading.roster import grade_roster
+from cs451.stages import stage_names
 from cs451.grading.runner import grade
 from cs451.packaging.release import build_release
 
@@ -352,7 +353,7 @@ def test12_gradebook_cells_that_look_like_formulas_are_quoted(corpus, tmp_path):
 
 # --- points from nothing, and from what a release ships --------------------------------------------
 
-@pytest.mark.parametrize("stage", ["sphere", "whitted", "hemicube", "radiosity"])
+@pytest.mark.parametrize("stage", stage_names())
 def test13_a_submission_that_does_nothing_scores_zero(stage):
     root = world_readable_dir("cs451-vacuous-")
     try:

@@ -8,10 +8,8 @@ full marks (one bad function never costs another task's points).
 """
 from __future__ import annotations
 
-import json
 import os
 import shutil
-import stat
 import tempfile
 from pathlib import Path
 

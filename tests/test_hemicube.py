@@ -103,20 +103,6 @@ def test06_truth_quotes_are_what_the_tests_expect():
     assert round(truth.howell_c11(1, 1, 1), 5) == 0.19982 and round(truth.howell_c14(1, 1, 1), 5) == 0.20004
 
 
-def test07_starter_scores_zero_with_a_message_per_test():
-    result = grade("hemicube", "starter", show_progress=False)
-    assert result.score == 0
-    for r in result.results:
-        assert "not implemented yet" in r.verdict.message   # rows need H1-H4 too: the message names the first missing
-
-
-@pytest.mark.slow
-def test08_reference_scores_full_marks():
-    result = grade("hemicube", "reference", show_progress=False)
-    failed = [(r.test.number, r.verdict.message) for r in result.results if not r.verdict.passed]
-    assert failed == [] and result.score == 100
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("file, old, new, task, message", [
     ("tables.py", "top = area / (np.pi * (x * x + y * y + 1.0) ** 2)", "top = area / (np.pi * (x * x + y * y + 1.0))", "H1", "cell"),

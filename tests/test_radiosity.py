@@ -327,7 +327,7 @@ def test18_furnace_renders_its_radiance_and_conserves_its_energy_on_hemicube_row
     """On hemicube rows (closed box: rows sum to 1 within 1e-4, proximity fix off) the energy is exact,
     Σ A B = Σ A E / (1 − ρ); single patches are off by the rows' reciprocity error (about 1%)."""
     scene = load_scene("furnace")
-    opts = R.options(scene)
+    opts = R.STAGE.options(scene)
     patches = R.make_patches(scene, REF, opts.patch_size)
     rows = R.hemicube_formfactors(patches.quads, opts.resolution, opts.proximity)
     sol = R.solve(patches, REF, opts, rows)
@@ -345,7 +345,7 @@ def test19_every_solver_option_solves_the_same_equations(cornell_rows):
     patches, rows = cornell_rows
     results = {}
     for solver in R.SOLVERS:
-        opts = R.options(scene, solver=solver, tolerance=1e-6, patch_size=140.0, ambient=False)
+        opts = R.STAGE.options(scene, solver=solver, tolerance=1e-6, patch_size=140.0, ambient=False)
         results[solver] = R.solve(patches, REF, opts, rows)
         assert results[solver].converged, results[solver].message
     want = results["direct"].radiosity

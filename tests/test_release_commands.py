@@ -24,6 +24,7 @@ import pytest
 
 from cs451 import KIT_ROOT
 from cs451.packaging.release import build_release
+from cs451.stages import stage_names
 from cs451.stages import get_stage
 
 from conftest import world_readable_dir
@@ -109,7 +110,7 @@ def solve(release: Path, stage: str) -> None:
     shutil.copytree(KIT_ROOT / "reference" / stage, release / stage, ignore=shutil.ignore_patterns("__pycache__"))
 
 
-STAGES = ["sphere", "whitted", "hemicube", "radiosity"]
+STAGES = stage_names()
 
 
 @pytest.mark.parametrize("stage", STAGES)

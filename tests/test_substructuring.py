@@ -18,7 +18,7 @@ from cs451.patches import patch_areas
 from bench.meshes import subdivide_uniform
 from cs451.scene import load_scene
 from cs451.stages import radiosity as R
-from cs451 import solvers as S
+from cs451 import solvers
 from cs451 import patching as P
 from cs451.stages.hemicube import calls
 from test_radiosity import random_scene
@@ -30,8 +30,8 @@ HEMICUBE = load_impl(resolve_impl("reference", "hemicube"), "hemicube")
 def test01_one_element_per_patch_is_plain_progressive_refinement():
     F, A, rho, E = random_scene(30, seed=5)
     n = len(A)
-    plain = R.solve_progressive(REF, S.MatrixRows(F), A, rho, E, tolerance=1e-6, use_ambient=False)
-    sub = S.solve_substructured(S.MatrixRows(F), np.arange(n), A, rho, E, tolerance=1e-6)
+    plain = R.solve_progressive(REF, solvers.MatrixRows(F), A, rho, E, tolerance=1e-6, use_ambient=False)
+    sub = S.solve_substructured(solvers.MatrixRows(F), np.arange(n), A, rho, E, tolerance=1e-6)
     assert sub.converged and plain.converged
     assert sub.order == plain.order
     assert np.allclose(sub.radiosity, plain.radiosity, rtol=1e-12, atol=1e-14)
@@ -91,7 +91,7 @@ def test04_cornell_box_substructured_approaches_the_element_solution_with_a_row_
     together = S.PatchToElementRows(engine, patches.quads, parent).matrix()
     one_by_one = np.stack([rows.row(p) for p in range(len(patches.quads))])
     assert np.abs(together - one_by_one).sum(axis=1).max() < 5e-3
-    truth = S.solve_direct(S.shooting_matrix(engine.matrix(), a), rho, E)
+    truth = solvers.solve_direct(solvers.shooting_matrix(engine.matrix(), a), rho, E)
     lit = E.max(axis=1) == 0
     error = (np.abs(sol.radiosity - truth)[lit] * a[lit, None]).sum() / (truth[lit] * a[lit, None]).sum()
     assert error < 0.10

@@ -24,7 +24,7 @@ from cs451.scene import BUNDLED_DIR, parse_scene
 from autograder.hemicube import checks, truth as truths
 
 #: The item buffer is exact integers; a few pixels on patch edges may differ between rasterisers.
-IMAGE = ImageTolerance(threshold=0.016, max_bad_fraction=0.01, shift=1)
+IMAGE = ImageTolerance()  # the kit's margin, measured in the README ("Tolerances")
 MATRIX_TOL = "entries within 1e-9 relative, 1e-12 absolute"
 #: Time limits: generous for clear numpy code (the reference takes well under a second for each).
 QUICK, RENDER = 10.0, 60.0

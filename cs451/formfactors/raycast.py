@@ -6,7 +6,7 @@ from typing import Any, Iterable
 import numpy as np
 
 from ..errors import KitError
-from ..patches import as_quads, patch_areas, patch_centers, patch_normals, patch_triangles
+from ..patches import as_quads, patch_centers, patch_normals, patch_triangles
 
 
 def formfactor_matrix_raycast(quads: Any, samples: int, seed: int = 0, rows: Iterable[int] | None = None,

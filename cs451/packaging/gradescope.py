@@ -21,7 +21,7 @@ from .. import __version__
 from ..errors import KitError, SubmissionError
 from ..grading.loader import load_tests
 from ..stages import get_stage
-from .files import LITTER, LITTER_PATTERNS, copy_tree, write_executable
+from .files import LITTER_PATTERNS, copy_tree, write_executable
 
 #: Seconds the whole grading may take inside Gradescope's default 10-minute limit (the rest: start-up and margin).
 GRADESCOPE_BUDGET = 480.0

@@ -1,7 +1,8 @@
 """The registry of stages, found by name (as pbrt-v4 creates shapes by name in one factory).
 
-Every module in this package except ``base`` is a stage and defines ``STAGE``;
-adding a stage means adding its module, nothing else.  Modules are imported
+Every module in this package except ``base`` and the private helpers (``_*.py``) is a
+stage and defines ``STAGE``; the registry finds a new stage by its module alone. The rest
+a stage needs (reference, specs, handout) is listed in docs/ARCHITECTURE.md.  Modules are imported
 lazily because each stage pulls in its own GL or numba machinery.
 """
 from __future__ import annotations

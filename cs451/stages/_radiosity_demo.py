@@ -35,7 +35,7 @@ def demo(module: Any, output: Path, window: bool, frames: int | None, scene_name
          size: tuple[int, int] = (256, 256)) -> list[Path]:
     """Headless: frames (B alone | B + ρ·ambient) after 0, 1, 2, 4, … shots, as PNGs and one animated GIF."""
     scene = load_scene(scene_name)
-    opts = R.options(scene)
+    opts = R.STAGE.options(scene)
     calls = R.calls(module)
     patches = R.make_patches(scene, module, opts.patch_size)
     wanted = set(demo_shots(50 * len(patches), frames))
@@ -52,7 +52,7 @@ def demo(module: Any, output: Path, window: bool, frames: int | None, scene_name
     def panels(B: np.ndarray, dB: np.ndarray) -> list[np.ndarray]:
         out = []
         for k, values in enumerate((B, B + rho * calls.ambient(a, rho, dB))):
-            positions, colors, corners = calls.vertex_colors(patches.quads, patches.parent, values)
+            positions, colors, corners = calls.corner_colors(patches.quads, patches.parent, values)
             scaled = colors * (opts.exposure / math.pi)
             if win is not None:
                 drawer.draw(positions, scaled, corners, mvp, width, height, scene.image.background, win.ctx.screen,

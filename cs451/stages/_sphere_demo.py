@@ -12,7 +12,6 @@ from ..demos.window import Window
 from ..imageio import save_png
 from ..scene import load_scene
 from . import sphere as s1
-from .base import student_call
 
 
 def demo(module: Any, folder: Path, window: bool, frames: int | None) -> list[Path]:
@@ -37,7 +36,7 @@ def _window(module: Any, frames: int | None) -> None:
         view = s1._look_at(module, cam.eye, cam.center, cam.up)
         while state.running and not win.done(frames):
             for key in win.keys():
-                state = student_call(s1.STAGE, module, "S7", key, state)
+                state = s1._key(module, key, state)
             tessellation = (state.shading, state.slices, state.stacks)
             if tessellation not in renderers:  # buffers built once per tessellation, like the notes' display list
                 meshes = [s1._mesh(module, sp.radius, state.slices, state.stacks) for sp in s1.spheres(scene)]
@@ -47,7 +46,7 @@ def _window(module: Any, frames: int | None) -> None:
 
             def draw() -> None:
                 win.ctx.viewport = viewport
-                renderers[tessellation].draw(scene, view, projection, s1.options(scene).local_viewer)
+                renderers[tessellation].draw(scene, view, projection, s1.STAGE.options(scene).local_viewer)
             win.show(draw)
     finally:
         win.close()

@@ -1,7 +1,11 @@
-"""What a stage is: its tasks (the functions a submission provides), its renderer and its probes.
+"""What a stage is: its tasks (the functions a submission provides), what each returns, its options, the scene
+kinds it draws, its renderer, its probes and its demo.
 
-A stage's interface is declared once, here and in the stage's module; the CLI,
-the autograder and the demos reach student code only through it.
+A stage's interface is declared once, in its module, with the pieces here; the CLI,
+the autograder and the demos reach student code only through it. A task declares
+what it returns (:class:`Out`), and :meth:`Stage.call` checks every answer against
+that, so a malformed answer becomes one line naming the task, never a traceback deep
+in the engine.
 """
 from __future__ import annotations
 
@@ -18,12 +22,41 @@ from ..errors import KitError
 
 
 @dataclass(frozen=True)
+class Out:
+    """One value a task returns: its name (for messages), its shape and its kind.
+
+    ``shape`` entries are lengths, ``None`` (any length), or expressions of the call's arguments
+    and of the values before it (``"len(origins)"``, ``"resolution // 2"``, ``"len(positions)"``).
+    ``kind``: ``f`` finite floats, ``f+inf`` floats where infinity means a miss (NaN never), ``i``
+    integers, ``b`` booleans, ``text`` a string, ``dict`` a dict (checked by the caller), ``any``.
+    ``below``: integers must index into something of this length (an expression as above).
+    """
+    name: str
+    shape: tuple[int | str | None, ...] = ()
+    kind: str = "f"
+    below: str | None = None
+
+
+@dataclass(frozen=True)
 class Task:
     """One thing the student writes, with the stable ID used in the handout, the code, the tests and the rubric."""
     id: str             # "S1"
     function: str       # the name the submission must define
     title: str          # "Perspective projection"
     params: tuple[str, ...]  # expected parameter names, checked when a submission loads
+    returns: tuple[Out, ...] = ()   # one Out: a single value; several: a tuple of them
+
+    @property
+    def label(self) -> str:
+        return f"{self.id} {self.function}()"
+
+
+class Probes(dict):
+    """A stage's probes by name; ``@PROBES.register`` adds ``probe_<name>`` as ``<name>``."""
+
+    def register(self, fn: Callable[..., dict[str, np.ndarray]]) -> Callable[..., dict[str, np.ndarray]]:
+        self[fn.__name__.removeprefix("probe_")] = fn
+        return fn
 
 
 @dataclass(frozen=True)
@@ -37,9 +70,12 @@ class Stage:
     probes: dict[str, Callable[..., dict[str, np.ndarray]]] = field(default_factory=dict)
     #: demo(module, output: Path, window: bool, frames: int | None) -> list[Path] of files written (none in a window)
     demo: Callable[..., list] | None = None
-    #: earlier stages whose trusted reference this stage's engine runs (radiosity: the hemicube); a student
-    #: release of this stage ships their reference, whose solutions are out by the time this stage starts
+    #: earlier stages whose implementation this stage's engine runs (radiosity: the hemicube), see :meth:`trusted`
     builds_on: tuple[str, ...] = ()
+    #: the stage's record of ``options.<name>`` in a scene file (a dataclass of schema fields)
+    options_type: type | None = None
+    #: the kinds of scene object and light the stage draws; a scene holding others is refused, naming them
+    draws: tuple[type, ...] = ()
 
     def task(self, task_id: str) -> Task:
         for t in self.tasks:
@@ -47,10 +83,93 @@ class Stage:
                 return t
         raise KeyError(task_id)
 
+    def call(self, impl: Any, task_id: str, *args: Any) -> Any:
+        """Call a task's function and check its answer against the task's declared ``returns``."""
+        task = self.task(task_id)
+        return check_returns(task, student_call(self, impl, task_id, *args), dict(zip(task.params, args)))
+
+    def options(self, scene: Any, **overrides: Any) -> Any:
+        """The scene's ``options.<stage>``, validated; ``overrides`` that are not None replace fields."""
+        from .. import schema
+        data = dict(scene.options.get(self.name, {}))
+        data.update({k: v for k, v in overrides.items() if v is not None})
+        return schema.parse_record(self.options_type, data, schema.Context(scene.label, f"options.{self.name}"))
+
+    def check_scene(self, scene: Any) -> None:
+        """Refuse a scene holding an object or light this stage does not draw, naming the first and the stage."""
+        for group in ("objects", "lights"):
+            for k, item in enumerate(getattr(scene, group)):
+                if not isinstance(item, self.draws):
+                    kinds = sorted({_kind(c) for c in self.draws})
+                    raise KitError(f"{scene.label}: {group}[{k}]: stage {self.number} ({self.name}) does not draw a "
+                                   f"{_kind(type(item))} (it draws: {', '.join(kinds)})")
+
+    def trusted(self, earlier: str) -> Any:
+        """The implementation of an earlier stage this one builds on, loaded (:func:`cs451.impl.earlier_stage_impl`)."""
+        from ..impl import earlier_stage_impl, load_impl
+        if earlier not in self.builds_on:
+            raise KitError(f"stage {self.name} does not build on stage {earlier!r}")
+        return load_impl(earlier_stage_impl(earlier), earlier)
+
     def handout_link(self, task: Task) -> str:
         anchor = f"{task.id}-{task.title}".lower().replace(" ", "-")
         anchor = "".join(c for c in anchor if c.isalnum() or c == "-")
         return f"assignments/{self.handout}/README.md#{anchor}"
+
+
+def _kind(cls: type) -> str:
+    """A kind as a scene file names it: its ``type`` ("sphere"), and "light" after a light's ("point light")."""
+    name = getattr(cls, "type_name", None) or cls.__name__.lower()
+    return f"{name} light" if any(base.__name__ == "Light" for base in cls.__mro__[1:]) else name
+
+
+def _shape(shape: tuple[int | str | None, ...], names: dict[str, Any]) -> tuple[int | None, ...]:
+    return tuple(s if s is None or isinstance(s, int) else int(eval(s, {"len": len}, names)) for s in shape)
+
+
+def check_returns(task: Task, value: Any, names: dict[str, Any]) -> Any:
+    """``value`` checked against ``task.returns`` (the arguments by name in ``names``); the checked value(s)."""
+    outs = task.returns
+    if not outs:
+        return value
+    if len(outs) == 1:
+        return _check_out(task, outs[0], value, names, single=True)
+    if not isinstance(value, (tuple, list)) or len(value) != len(outs):
+        got = f"{len(value)} values" if isinstance(value, (tuple, list)) else type(value).__name__
+        raise KitError(f"{task.label} must return ({', '.join(o.name for o in outs)}), got {got}")
+    names = dict(names)
+    checked = []
+    for out, part in zip(outs, value):
+        checked.append(_check_out(task, out, part, names, single=False))
+        names[out.name] = checked[-1]
+    return tuple(checked)
+
+
+def _check_out(task: Task, out: Out, value: Any, names: dict[str, Any], single: bool) -> Any:
+    what = task.label if single else f"{task.label} {out.name}"
+    if out.kind == "any":
+        return value
+    if out.kind == "text":
+        if not isinstance(value, str):
+            raise KitError(f"{what} must be a string, got {type(value).__name__}")
+        return value
+    if out.kind == "dict":
+        if not isinstance(value, dict):
+            raise KitError(f"{what} must be a dict, got {type(value).__name__}")
+        return value
+    shape = _shape(out.shape, names)
+    if out.kind == "f+inf":
+        arr = as_array(value, shape, what, kind="f", allow_inf=True)
+    elif out.kind == "b":
+        arr = as_array(value, shape, what, kind="b")
+    else:
+        arr = as_array(value, shape, what, kind=out.kind)
+    if out.below is not None and arr.size:
+        bound = int(eval(out.below, {"len": len}, names))
+        if arr.min() < 0 or arr.max() >= bound:
+            raise KitError(f"{what} holds {int(arr.max() if arr.max() >= bound else arr.min())}, but indices "
+                           f"run from 0 to {bound - 1}")
+    return arr
 
 
 def check_interface(stage: Stage, module: ModuleType) -> list[str]:
@@ -92,8 +211,9 @@ def shape_text(shape: tuple[int | None, ...]) -> str:
     return f"({inner},)" if len(shape) == 1 else f"({inner})"
 
 
-def as_array(value: Any, shape: tuple[int | None, ...], what: str, kind: str = "f") -> np.ndarray:
-    """Check a student's result: array-like, of this shape (None = any length), finite; else a KitError."""
+def as_array(value: Any, shape: tuple[int | None, ...], what: str, kind: str = "f", allow_inf: bool = False) -> np.ndarray:
+    """Check a student's result: array-like, of this shape (None = any length), finite (or inf where
+    ``allow_inf``, never NaN), integers for ``kind="i"``, booleans for ``kind="b"``; else a KitError."""
     try:
         arr = np.asarray(value, dtype=np.float64 if kind == "f" else None)
     except (TypeError, ValueError) as err:
@@ -106,8 +226,15 @@ def as_array(value: Any, shape: tuple[int | None, ...], what: str, kind: str = "
                 arr = arr.astype(np.int64)
             else:
                 raise KitError(f"{what} returned {arr.dtype} values, expected integers")
-    elif not np.isfinite(arr).all():
-        raise KitError(f"{what} returned NaN or infinite values")
+    elif kind == "b":
+        if arr.dtype.kind != "b":
+            if arr.dtype.kind in "iuf" and np.isin(arr, (0, 1)).all():
+                arr = arr.astype(bool)
+            else:
+                raise KitError(f"{what} returned {arr.dtype} values, expected booleans")
+    elif np.isnan(arr).any() or (not allow_inf and not np.isfinite(arr).all()):
+        raise KitError(f"{what} returned NaN" + ("" if allow_inf else " or infinite values") +
+                       (" (a miss must be inf)" if allow_inf else ""))
     return arr
 
 

@@ -15,18 +15,20 @@ from typing import Any, Literal
 import numpy as np
 
 from .. import schema
-from ..errors import KitError
-from ..scene import Scene, parse_scene
+from ..scene import AreaLight, Polygon, Scene, parse_scene
 from ..schema import Context, field
-from .base import Stage, Task, as_array, student_call
+from .base import Out, Probes, Stage, Task
 
 TASKS = (
-    Task("H1", "delta_form_factors", "Delta form factors", ("resolution",)),
-    Task("H2", "hemicube_views", "The five views", ("center", "normal", "up")),
-    Task("H3", "hemicube_projections", "The face projections", ("near", "far")),
-    Task("H4", "item_buffer_shaders", "Item-buffer shaders", ()),
-    Task("H5", "form_factor_row", "The row of form factors", ("top_items", "side_items", "top_weights", "side_weights", "n_patches")),
-    Task("H6", "point_polygon_form_factor", "The proximity fix", ("point", "normal", "polygon")),
+    Task("H1", "delta_form_factors", "Delta form factors", ("resolution",),
+         (Out("top", ("resolution", "resolution")), Out("side", ("resolution // 2", "resolution")))),
+    Task("H2", "hemicube_views", "The five views", ("center", "normal", "up"), (Out("views", (5, 4, 4)),)),
+    Task("H3", "hemicube_projections", "The face projections", ("near", "far"), (Out("projections", (2, 4, 4)),)),
+    Task("H4", "item_buffer_shaders", "Item-buffer shaders", (),
+         (Out("vertex_source", kind="text"), Out("fragment_source", kind="text"))),
+    Task("H5", "form_factor_row", "The row of form factors",
+         ("top_items", "side_items", "top_weights", "side_weights", "n_patches"), (Out("row", ("n_patches",)),)),
+    Task("H6", "point_polygon_form_factor", "The proximity fix", ("point", "normal", "polygon"), (Out("F", ()),)),
 )
 
 
@@ -39,58 +41,36 @@ class HemicubeOptions:
         "'formfactors': the scene from the camera, each patch coloured by F from `patch` to it.", "itembuffer")
     rotate: bool = field("Rotate the hemicube about the normal by a seeded random angle.", False)
 
-
-def options(scene: Scene) -> HemicubeOptions:
-    opts = schema.parse_record(HemicubeOptions, scene.options.get("hemicube", {}),
-                               Context(scene.source or scene.name or "<scene>", "options.hemicube"))
-    if opts.resolution % 2 or opts.resolution < 2:
-        raise Context(scene.source or scene.name or "<scene>", "options.hemicube").child("resolution").error(
-            f"must be an even number >= 2, got {opts.resolution}")
-    return opts
+    def validate(self, ctx: Context) -> None:
+        if self.resolution % 2 or self.resolution < 2:
+            raise ctx.child("resolution").error(f"must be an even number >= 2, got {self.resolution}")
 
 
 # --- calling the student's functions, with checks on what they return --------
 
 def call_tables(impl: Any, resolution: int) -> tuple[np.ndarray, np.ndarray]:
-    out = student_call(STAGE, impl, "H1", int(resolution))
-    if not isinstance(out, (tuple, list)) or len(out) != 2:
-        raise KitError("H1 delta_form_factors() must return (top, side)")
-    r = int(resolution)
-    return (as_array(out[0], (r, r), "H1 delta_form_factors() top"),
-            as_array(out[1], (r // 2, r), "H1 delta_form_factors() side"))
+    return STAGE.call(impl, "H1", int(resolution))
 
 
 def call_views(impl: Any, center: np.ndarray, normal: np.ndarray, up: np.ndarray) -> np.ndarray:
-    out = student_call(STAGE, impl, "H2", np.array(center, float), np.array(normal, float), np.array(up, float))
-    return as_array(out, (5, 4, 4), "H2 hemicube_views()")
+    return STAGE.call(impl, "H2", np.array(center, float), np.array(normal, float), np.array(up, float))
 
 
 def call_projections(impl: Any, near: float, far: float) -> np.ndarray:
-    return as_array(student_call(STAGE, impl, "H3", float(near), float(far)), (2, 4, 4), "H3 hemicube_projections()")
+    return STAGE.call(impl, "H3", float(near), float(far))
 
 
 def call_shaders(impl: Any) -> tuple[str, str]:
-    out = student_call(STAGE, impl, "H4")
-    if not isinstance(out, (tuple, list)) or len(out) != 2 or not all(isinstance(s, str) for s in out):
-        raise KitError("H4 item_buffer_shaders() must return (vertex_source, fragment_source) strings")
-    return out[0], out[1]
+    return STAGE.call(impl, "H4")
 
 
 def call_row(impl: Any, top_items: np.ndarray, side_items: np.ndarray, top_w: np.ndarray, side_w: np.ndarray,
              n: int) -> np.ndarray:
-    out = student_call(STAGE, impl, "H5", top_items, side_items, top_w, side_w, int(n))
-    return as_array(out, (n,), "H5 form_factor_row()")
+    return STAGE.call(impl, "H5", top_items, side_items, top_w, side_w, int(n))
 
 
 def call_contour(impl: Any, point: np.ndarray, normal: np.ndarray, polygon: np.ndarray) -> float:
-    out = student_call(STAGE, impl, "H6", np.array(point, float), np.array(normal, float), np.array(polygon, float))
-    try:
-        value = float(np.asarray(out, dtype=np.float64).reshape(()))
-    except (TypeError, ValueError):
-        raise KitError(f"H6 point_polygon_form_factor() must return one number, got {type(out).__name__}") from None
-    if not np.isfinite(value):
-        raise KitError("H6 point_polygon_form_factor() returned NaN or infinity")
-    return value
+    return float(STAGE.call(impl, "H6", np.array(point, float), np.array(normal, float), np.array(polygon, float)))
 
 
 class _Calls:
@@ -131,10 +111,10 @@ def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, **_: An
     """The hemicube of ``options.hemicube.patch`` unfolded (a colour per patch id), or F from it painted on the scene."""
     from ..formfactors import HemicubeFormFactors, formfactor_image, item_buffer_image
     from ..patches import scene_polygons
-    opts = options(scene)
+    opts = STAGE.options(scene)
     quads, _, _ = scene_polygons(scene)
     if opts.patch >= len(quads):
-        raise Context(scene.source or scene.name or "<scene>", "options.hemicube").child("patch").error(
+        raise Context(scene.label, "options.hemicube").child("patch").error(
             f"the scene has {len(quads)} patches (0 .. {len(quads) - 1}), got {opts.patch}")
     ff = HemicubeFormFactors(quads, calls(impl), resolution=opts.resolution, rotate=opts.rotate)
     if opts.view == "itembuffer":
@@ -146,19 +126,26 @@ def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, **_: An
 
 # --- probes: what the autograder's worker asks a submission for ------------------
 
+PROBES = Probes()
+
+
+@PROBES.register
 def probe_tables(impl: Any, resolution: int) -> dict[str, np.ndarray]:
     top, side = call_tables(impl, resolution)
     return {"top": top, "side": side}
 
 
+@PROBES.register
 def probe_views(impl: Any, center: list, normal: list, up: list) -> dict[str, np.ndarray]:
     return {"views": call_views(impl, np.array(center, float), np.array(normal, float), np.array(up, float))}
 
 
+@PROBES.register
 def probe_projections(impl: Any, near: float, far: float) -> dict[str, np.ndarray]:
     return {"projections": call_projections(impl, near, far)}
 
 
+@PROBES.register
 def probe_row_from_items(impl: Any, top_items: list, side_items: list, top_weights: list, side_weights: list,
                          n_patches: int) -> dict[str, np.ndarray]:
     args = [np.asarray(top_items, dtype=np.uint32), np.asarray(side_items, dtype=np.uint32),
@@ -166,6 +153,7 @@ def probe_row_from_items(impl: Any, top_items: list, side_items: list, top_weigh
     return {"row": call_row(impl, *args, int(n_patches))}
 
 
+@PROBES.register
 def probe_contour(impl: Any, point: list, normal: list, polygon: list) -> dict[str, np.ndarray]:
     return {"F": np.array(call_contour(impl, np.array(point, float), np.array(normal, float), np.array(polygon, float)))}
 
@@ -175,6 +163,7 @@ def _quads(quads: list) -> np.ndarray:
     return as_quads(quads)
 
 
+@PROBES.register
 def probe_rows(impl: Any, quads: list, rows: list[int], resolution: int = 128, rotate: bool = False,
                proximity: str = "none", seed: int = 0) -> dict[str, np.ndarray]:
     """Rows of the form-factor matrix of ``quads``, everything from the submission (H1-H5, and H6 if asked)."""
@@ -183,6 +172,7 @@ def probe_rows(impl: Any, quads: list, rows: list[int], resolution: int = 128, r
     return {"rows": ff.rows(list(rows))}
 
 
+@PROBES.register
 def probe_scene_rows(impl: Any, scene: dict, rows: list[int], resolution: int = 64,
                      proximity: str = "none") -> dict[str, np.ndarray]:
     from ..patches import scene_polygons
@@ -190,6 +180,7 @@ def probe_scene_rows(impl: Any, scene: dict, rows: list[int], resolution: int = 
     return probe_rows(impl, quads.tolist(), rows, resolution=resolution, proximity=proximity)
 
 
+@PROBES.register
 def probe_hemicube_buffers(impl: Any, quads: list, rows: list[int], resolution: int = 128, rotate: bool = False,
                            seed: int = 0) -> dict[str, np.ndarray]:
     """Trusted inputs of the row tests (run on the reference only): the item buffers of the rows' hemicubes,
@@ -202,6 +193,7 @@ def probe_hemicube_buffers(impl: Any, quads: list, rows: list[int], resolution: 
             "hemicube_rows": ff.rows(list(rows))}
 
 
+@PROBES.register
 def probe_rows_from_buffers(impl: Any, quads: list, rows: list[int], top_items: np.ndarray, side_items: np.ndarray,
                             top_weights: np.ndarray, side_weights: np.ndarray, **_: Any) -> dict[str, np.ndarray]:
     """H5 alone: the rows the submission sums from trusted item buffers and tables (the reference's H1 to H4)."""
@@ -210,6 +202,7 @@ def probe_rows_from_buffers(impl: Any, quads: list, rows: list[int], top_items: 
                               for top, side in zip(top_items, side_items)])}
 
 
+@PROBES.register
 def probe_proximity_rows(impl: Any, quads: list, rows: list[int], hemicube_rows: np.ndarray, resolution: int = 128,
                          rotate: bool = False, seed: int = 0, **_: Any) -> dict[str, np.ndarray]:
     """H6 alone: trusted hemicube rows (the reference's H1 to H5), fixed for close patches with the submission's H6."""
@@ -218,6 +211,7 @@ def probe_proximity_rows(impl: Any, quads: list, rows: list[int], hemicube_rows:
     return {"rows": np.stack([ff.proximity_fixed(i, row) for i, row in zip(rows, hemicube_rows)])}
 
 
+@PROBES.register
 def probe_item_buffer_parts(impl: Any, quads: list, patch: int, resolution: int) -> dict[str, np.ndarray]:
     """The trusted inputs of an item-buffer image test: the views and projections (from the reference)."""
     from ..formfactors import hemicube_inputs
@@ -225,6 +219,7 @@ def probe_item_buffer_parts(impl: Any, quads: list, patch: int, resolution: int)
     return {"views": views, "projections": projections}
 
 
+@PROBES.register
 def probe_item_buffer(impl: Any, quads: list, patch: int, resolution: int, **given: np.ndarray) -> dict[str, np.ndarray]:
     """The unfolded item buffer of one hemicube as an image, drawn with the submission's shaders (H4)."""
     from ..formfactors import HemicubeFormFactors, item_buffer_image
@@ -234,10 +229,5 @@ def probe_item_buffer(impl: Any, quads: list, patch: int, resolution: int, **giv
 
 STAGE = Stage(
     name="hemicube", number=3, title="Hemi-cube form factors", handout="03-hemicube", tasks=TASKS, render=render,
-    probes={"tables": probe_tables, "views": probe_views, "projections": probe_projections,
-            "row_from_items": probe_row_from_items, "contour": probe_contour, "rows": probe_rows,
-            "scene_rows": probe_scene_rows, "hemicube_buffers": probe_hemicube_buffers,
-            "rows_from_buffers": probe_rows_from_buffers, "proximity_rows": probe_proximity_rows,
-            "item_buffer_parts": probe_item_buffer_parts,
-            "item_buffer": probe_item_buffer},
+    probes=PROBES, options_type=HemicubeOptions, draws=(Polygon, AreaLight),
 )

@@ -12,30 +12,33 @@ directly comparable with a path tracer.
 """
 from __future__ import annotations
 
-import math
 import sys
-import time
-from dataclasses import dataclass, field as dc_field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Literal
 
 import numpy as np
 
 from .. import drawing, patching, schema, solvers
-from ..errors import KitError
 from ..patching import Patches
 from ..solvers import MatrixRows, Solution, solve_direct, shooting_matrix
-from ..scene import Scene, parse_scene
+from ..scene import AreaLight, Polygon, Scene, parse_scene
 from ..schema import Context, field
-from .base import Stage, Task, as_array, student_call
+from .base import Out, Probes, Stage, Task, check_returns, student_call
 
 TASKS = (
-    Task("R1", "subdivide", "Subdividing into patches", ("quads", "max_edge")),
-    Task("R2", "shoot", "Shooting one patch", ("i", "row", "areas", "reflectance", "radiosity", "unshot")),
+    Task("R1", "subdivide", "Subdividing into patches", ("quads", "max_edge"),
+         (Out("patches", (None, 4, 3)), Out("parent", ("len(patches)",), kind="i", below="len(quads)"))),
+    Task("R2", "shoot", "Shooting one patch", ("i", "row", "areas", "reflectance", "radiosity", "unshot"),
+         (Out("radiosity", ("len(areas)", 3)), Out("unshot", ("len(areas)", 3)))),
     Task("R3", "progressive_refinement", "The shooting loop",
-         ("row", "areas", "reflectance", "emission", "tolerance", "max_shots", "overshoot", "on_shot")),
-    Task("R4", "ambient_term", "The ambient term", ("areas", "reflectance", "unshot")),
-    Task("R5", "vertex_colors", "Vertex colours", ("quads", "parent", "radiosity")),
+         ("row", "areas", "reflectance", "emission", "tolerance", "max_shots", "overshoot", "on_shot"),
+         (Out("radiosity", ("len(areas)", 3)), Out("unshot", ("len(areas)", 3)),
+          Out("order", (None,), kind="i", below="len(areas)"))),
+    Task("R4", "ambient_term", "The ambient term", ("areas", "reflectance", "unshot"), (Out("ambient", (3,)),)),
+    Task("R5", "vertex_colors", "Vertex colours", ("quads", "parent", "radiosity"),
+         (Out("positions", (None, 3)), Out("colors", ("len(positions)", 3)),
+          Out("corners", ("len(quads)", 4), kind="i", below="len(positions)"))),
 )
 
 SOLVERS = ("progressive", "jacobi", "gauss-seidel", "direct")
@@ -70,65 +73,39 @@ class RadiosityOptions:
             raise ctx.child("tolerance").error(f"must be below 1, got {self.tolerance}")
 
 
-def options(scene: Scene, **overrides: Any) -> RadiosityOptions:
-    """The scene's ``options.radiosity``, validated; ``overrides`` (not None) replace fields."""
-    data = dict(scene.options.get("radiosity", {}))
-    data.update({k: v for k, v in overrides.items() if v is not None})
-    return schema.parse_record(RadiosityOptions, data, Context(scene.source or scene.name or "<scene>", "options.radiosity"))
-
-
 # --- calling the student's functions, with checks on what they return ------------
 
 def call_subdivide(impl: Any, quads: np.ndarray, max_edge: float) -> tuple[np.ndarray, np.ndarray]:
-    out = student_call(STAGE, impl, "R1", np.array(quads, dtype=np.float64), float(max_edge))
-    if not isinstance(out, (tuple, list)) or len(out) != 2:
-        raise KitError("R1 subdivide() must return (patches, parent)")
-    patches = as_array(out[0], (None, 4, 3), "R1 subdivide() patches")
-    parent = as_array(out[1], (len(patches),), "R1 subdivide() parent", kind="i")
-    if len(parent) and (parent.min() < 0 or parent.max() >= len(quads)):
-        raise KitError(f"R1 subdivide() parent holds {int(parent.max())}, but there are {len(quads)} quads")
-    return patches, parent
+    return STAGE.call(impl, "R1", np.array(quads, dtype=np.float64), float(max_edge))
 
 
 def call_shoot(impl: Any, i: int, row: np.ndarray, areas: np.ndarray, reflectance: np.ndarray,
-          radiosity: np.ndarray, unshot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    n = len(areas)
-    out = student_call(STAGE, impl, "R2", int(i), row.copy(), areas.copy(), reflectance.copy(), radiosity.copy(), unshot.copy())
-    if not isinstance(out, (tuple, list)) or len(out) != 2:
-        raise KitError("R2 shoot() must return (radiosity, unshot)")
-    return as_array(out[0], (n, 3), "R2 shoot() radiosity"), as_array(out[1], (n, 3), "R2 shoot() unshot")
+               radiosity: np.ndarray, unshot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return STAGE.call(impl, "R2", int(i), row.copy(), areas.copy(), reflectance.copy(), radiosity.copy(), unshot.copy())
 
 
 def call_ambient(impl: Any, areas: np.ndarray, reflectance: np.ndarray, unshot: np.ndarray) -> np.ndarray:
-    return as_array(student_call(STAGE, impl, "R4", areas.copy(), reflectance.copy(), unshot.copy()), (3,),
-                    "R4 ambient_term()")
+    return STAGE.call(impl, "R4", areas.copy(), reflectance.copy(), unshot.copy())
 
 
 def call_vertex_colors(impl: Any, quads: np.ndarray, parent: np.ndarray, radiosity: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    out = student_call(STAGE, impl, "R5", quads.copy(), parent.copy(), radiosity.copy())
-    if not isinstance(out, (tuple, list)) or len(out) != 3:
-        raise KitError("R5 vertex_colors() must return (positions, colors, corners)")
-    positions = as_array(out[0], (None, 3), "R5 vertex_colors() positions")
-    colors = as_array(out[1], (len(positions), 3), "R5 vertex_colors() colors")
-    corners = as_array(out[2], (len(quads), 4), "R5 vertex_colors() corners", kind="i")
-    if corners.size and (corners.min() < 0 or corners.max() >= len(positions)):
-        raise KitError(f"R5 vertex_colors() corners index vertex {int(corners.max())} of {len(positions)}")
-    return positions, colors, corners
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    return STAGE.call(impl, "R5", quads.copy(), parent.copy(), radiosity.copy())
 
 
 def call_progressive(impl: Any, row: Callable, areas: np.ndarray, reflectance: np.ndarray, emission: np.ndarray,
                      tolerance: float, max_shots: int, overshoot: float, on_shot: Callable | None
                      ) -> tuple[np.ndarray, np.ndarray, list[int]]:
-    n = len(areas)
-    out = student_call(STAGE, impl, "R3", row, areas, reflectance, emission, tolerance, max_shots, overshoot, on_shot)
-    if not isinstance(out, (tuple, list)) or len(out) != 3:
-        raise KitError("R3 progressive_refinement() must return (radiosity, unshot, order)")
-    radiosity = as_array(out[0], (n, 3), "R3 progressive_refinement() radiosity")
-    unshot = as_array(out[1], (n, 3), "R3 progressive_refinement() unshot")
-    order = [int(i) for i in as_array(np.asarray(list(out[2])).reshape(-1), (None,), "R3 progressive_refinement() order",
-                                      kind="i")]
-    return radiosity, unshot, order
+    task = STAGE.task("R3")
+    args = (row, areas, reflectance, emission, tolerance, max_shots, overshoot, on_shot)
+    out = student_call(STAGE, impl, "R3", *args)
+    if isinstance(out, (tuple, list)) and len(out) == 3 and not isinstance(out[2], np.ndarray):
+        try:                              # the order may be any iterable of indices (a list, a generator)
+            out = (out[0], out[1], list(out[2]))
+        except TypeError:
+            pass                          # not iterable: check_returns names it
+    radiosity, unshot, order = check_returns(task, out, dict(zip(task.params, args)))
+    return radiosity, unshot, [int(i) for i in order]
 
 
 class _Calls:
@@ -137,7 +114,7 @@ class _Calls:
     def __init__(self, impl: Any):
         self.impl = impl
 
-    def subdivide(self, quads: np.ndarray, max_edge: float) -> tuple[np.ndarray, np.ndarray]:
+    def split(self, quads: np.ndarray, max_edge: float) -> tuple[np.ndarray, np.ndarray]:
         return call_subdivide(self.impl, quads, max_edge)
 
     def progressive(self, *args: Any) -> tuple[np.ndarray, np.ndarray, list[int]]:
@@ -146,7 +123,7 @@ class _Calls:
     def ambient(self, areas: np.ndarray, reflectance: np.ndarray, unshot: np.ndarray) -> np.ndarray:
         return call_ambient(self.impl, areas, reflectance, unshot)
 
-    def vertex_colors(self, quads: np.ndarray, parent: np.ndarray, radiosity: np.ndarray
+    def corner_colors(self, quads: np.ndarray, parent: np.ndarray, radiosity: np.ndarray
                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return call_vertex_colors(self.impl, quads, parent, radiosity)
 
@@ -160,7 +137,7 @@ def calls(impl: Any) -> Any:
 
 def make_patches(scene: Scene, impl: Any, patch_size: float) -> Patches:
     """The scene's polygons, subdivided by the implementation's R1 (:func:`cs451.patching.make_patches`)."""
-    return patching.make_patches(scene, calls(impl).subdivide, patch_size)
+    return patching.make_patches(scene, calls(impl).split, patch_size)
 
 
 def solve_progressive(impl: Any, rows: Any, *args: Any, **kwargs: Any) -> Solution:
@@ -178,18 +155,16 @@ def solve(patches: Patches, impl: Any, opts: RadiosityOptions, rows: Any = None,
 
 def camera_view(scene: Scene) -> np.ndarray:
     """World to eye for the scene camera, from the stage-3 implementation's H2 (see :mod:`cs451.viewing`)."""
-    from ..impl import earlier_stage_impl, load_impl
     from ..viewing import camera_view as view_from
     from . import hemicube as H
 
-    impl = load_impl(earlier_stage_impl("hemicube"), "hemicube")
-    return view_from(scene.camera, H.calls(impl).views)
+    return view_from(scene.camera, H.calls(STAGE.trusted("hemicube")).views)
 
 
 def draw_solution(scene: Scene, impl: Any, patches: Patches, display: np.ndarray, size: tuple[int, int] | None,
                   exposure: float = 1.0, drawer: Any = None, view: np.ndarray | None = None) -> np.ndarray:
     """The Gouraud-shaded image of per-patch radiosities through the implementation's R5 (:mod:`cs451.drawing`)."""
-    return drawing.draw_solution(scene, calls(impl).vertex_colors, patches, display, size,
+    return drawing.draw_solution(scene, calls(impl).corner_colors, patches, display, size,
                                  camera_view(scene) if view is None else view, exposure, drawer)
 
 def hemicube_formfactors(quads: np.ndarray, resolution: int = 128, proximity: str = "contour", ctx: Any = None,
@@ -203,17 +178,15 @@ def hemicube_formfactors(quads: np.ndarray, resolution: int = 128, proximity: st
     ``seed`` picks the hemicubes' random rotations (another seed: an independent estimate of F).
     """
     from ..formfactors import HemicubeFormFactors
-    from ..impl import earlier_stage_impl, load_impl
     from . import hemicube as H
 
-    impl = load_impl(earlier_stage_impl("hemicube"), "hemicube")
-    return HemicubeFormFactors(quads, H.calls(impl), resolution=resolution, proximity=proximity, ctx=ctx,
+    return HemicubeFormFactors(quads, H.calls(STAGE.trusted("hemicube")), resolution=resolution, proximity=proximity, ctx=ctx,
                                batch=batch, seed=seed, resample_blind=RESAMPLE_BLIND)
 
 
 def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, verbose: bool = True, **overrides: Any) -> np.ndarray:
     """Subdivide, solve and draw a scene with an implementation; returns linear radiance (h, w, 3)."""
-    opts = options(scene, **overrides)
+    opts = STAGE.options(scene, **overrides)
     patches = make_patches(scene, impl, opts.patch_size)
     sol = solve(patches, impl, opts)
     if verbose:
@@ -223,11 +196,16 @@ def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, verbose
 
 # --- probes: what the autograder's worker asks a submission for -----------------------
 
+PROBES = Probes()
+
+
+@PROBES.register
 def probe_subdivide(impl: Any, quads: list, max_edge: float) -> dict[str, np.ndarray]:
     patches, parent = call_subdivide(impl, np.asarray(quads, dtype=np.float64), max_edge)
     return {"patches": patches, "parent": parent}
 
 
+@PROBES.register
 def probe_shoot(impl: Any, i: int, F: list, areas: list, reflectance: list, radiosity: list, unshot: list
                 ) -> dict[str, np.ndarray]:
     F_ = np.asarray(F, dtype=np.float64)
@@ -242,6 +220,7 @@ def _system(params: dict, given: dict) -> tuple[np.ndarray, np.ndarray, np.ndarr
     return tuple(np.asarray(params[k], dtype=np.float64) for k in ("F", "areas", "reflectance", "emission"))  # type: ignore[return-value]
 
 
+@PROBES.register
 def probe_progressive(impl: Any, tolerance: float, max_shots: int, overshoot: float = 1.0, scene: dict | None = None,
                       patch_size: float = 0.0, resolution: int = 64, F: list | None = None, areas: list | None = None,
                       reflectance: list | None = None, emission: list | None = None, **given: np.ndarray
@@ -256,16 +235,19 @@ def probe_progressive(impl: Any, tolerance: float, max_shots: int, overshoot: fl
             "areas": a, "emission": E, "reflectance": rho}
 
 
+@PROBES.register
 def probe_ambient(impl: Any, areas: list, reflectance: list, unshot: list) -> dict[str, np.ndarray]:
     return {"ambient": call_ambient(impl, np.asarray(areas, float), np.asarray(reflectance, float), np.asarray(unshot, float))}
 
 
+@PROBES.register
 def probe_vertex_colors(impl: Any, quads: list, parent: list, radiosity: list) -> dict[str, np.ndarray]:
     positions, colors, corners = call_vertex_colors(impl, np.asarray(quads, float), np.asarray(parent, dtype=np.int64),
                                                np.asarray(radiosity, float))
     return {"positions": positions, "colors": colors, "corners": corners}
 
 
+@PROBES.register
 def probe_system(impl: Any, scene: dict, patch_size: float = 0.0, resolution: int = 64, **_: Any) -> dict[str, np.ndarray]:
     """Trusted inputs for the scene tests (run on the reference only): patches, colours, the full F and the camera view."""
     sc = parse_scene(scene, "<probe scene>")
@@ -275,6 +257,7 @@ def probe_system(impl: Any, scene: dict, patch_size: float = 0.0, resolution: in
             "emission": p.emission, "F": np.asarray(F, dtype=np.float64), "view": camera_view(sc)}
 
 
+@PROBES.register
 def probe_solved_system(impl: Any, scene: dict, size: list[int] | None = None, tolerance: float = 1e-3,
                         use_ambient: bool = True, max_shots: int = 0, patch_size: float = 0.0, resolution: int = 64
                         ) -> dict[str, np.ndarray]:
@@ -287,6 +270,7 @@ def probe_solved_system(impl: Any, scene: dict, size: list[int] | None = None, t
     return out
 
 
+@PROBES.register
 def probe_render(impl: Any, scene: dict, size: list[int], tolerance: float = 1e-3, use_ambient: bool = True,
                  max_shots: int = 0, patch_size: float = 0.0, resolution: int = 64, **given: np.ndarray
                  ) -> dict[str, np.ndarray]:
@@ -303,7 +287,7 @@ def probe_render(impl: Any, scene: dict, size: list[int], tolerance: float = 1e-
     else:
         display = solve_progressive(impl, MatrixRows(given["F"]), p.areas, p.reflectance, p.emission, tolerance,
                                     max_shots, 1.0, use_ambient).display
-    image = draw_solution(sc, impl, p, display, (int(size[0]), int(size[1])), options(sc).exposure,
+    image = draw_solution(sc, impl, p, display, (int(size[0]), int(size[1])), STAGE.options(sc).exposure,
                           view=given.get("view"))
     return {"image": np.clip(image * sc.image.exposure, 0.0, 1.0), "display": display}
 
@@ -317,10 +301,10 @@ def demo(module: Any, output: Path, window: bool, frames: int | None) -> list[Pa
 STAGE = Stage(
     name="radiosity", number=4, title="Progressive refinement radiosity", handout="04-radiosity", tasks=TASKS,
     render=render,
-    probes={"subdivide": probe_subdivide, "shoot": probe_shoot, "progressive": probe_progressive,
-            "ambient": probe_ambient, "vertex_colors": probe_vertex_colors, "system": probe_system,
-            "solved_system": probe_solved_system, "render": probe_render},
+    probes=PROBES,
     demo=demo,
     builds_on=("hemicube",),
+    options_type=RadiosityOptions,
+    draws=(Polygon, AreaLight),
 )
 

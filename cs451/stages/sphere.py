@@ -19,7 +19,7 @@ from ..errors import KitError
 from ..gl import compile_program, create_context
 from ..scene import Camera, DirectionalLight, PointLight, Scene, Sphere, parse_scene
 from ..schema import Context, field
-from .base import Stage, Task, as_array, functions_replaced, student_call
+from .base import Out, Probes, Stage, Task, functions_replaced
 
 MAX_LIGHTS = 8
 
@@ -46,14 +46,18 @@ uniform bool u_local_viewer;
 VERTEX_INPUTS = "in vec3 in_position;  // object space\nin vec3 in_normal;\n"
 FRAGMENT_OUTPUT = "out vec4 frag_color;\n"
 
+SHADERS = (Out("vertex_source", kind="text"), Out("fragment_source", kind="text"))
 TASKS = (
-    Task("S1", "perspective", "Perspective projection", ("fovy", "aspect", "near", "far")),
-    Task("S2", "look_at", "The look-at view matrix", ("eye", "center", "up")),
-    Task("S3", "sphere_mesh", "The sphere mesh", ("radius", "slices", "stacks")),
-    Task("S4", "gouraud_shaders", "Gouraud shading", ()),
-    Task("S5", "phong_shaders", "Phong shading", ()),
-    Task("S6", "reshape", "Resizing the window", ("width", "height", "camera")),
-    Task("S7", "handle_key", "Keyboard controls", ("key", "state")),
+    Task("S1", "perspective", "Perspective projection", ("fovy", "aspect", "near", "far"), (Out("matrix", (4, 4)),)),
+    Task("S2", "look_at", "The look-at view matrix", ("eye", "center", "up"), (Out("matrix", (4, 4)),)),
+    Task("S3", "sphere_mesh", "The sphere mesh", ("radius", "slices", "stacks"),
+         (Out("positions", (None, 3)), Out("normals", ("len(positions)", 3)),
+          Out("triangles", (None, 3), "i", below="len(positions)"))),
+    Task("S4", "gouraud_shaders", "Gouraud shading", (), SHADERS),
+    Task("S5", "phong_shaders", "Phong shading", (), SHADERS),
+    Task("S6", "reshape", "Resizing the window", ("width", "height", "camera"),
+         (Out("viewport", (4,), "i"), Out("projection", (4, 4)))),
+    Task("S7", "handle_key", "Keyboard controls", ("key", "state"), (Out("state", kind="any"),)),
 )
 
 
@@ -72,63 +76,56 @@ class SphereOptions:
     local_viewer: bool = field("GL_LIGHT_MODEL_LOCAL_VIEWER: the specular half-vector uses the direction to the eye.", True)
 
 
-def options(scene: Scene) -> SphereOptions:
-    return schema.parse_record(SphereOptions, scene.options.get("sphere", {}),
-                               Context(scene.source or scene.name or "<scene>", "options.sphere"))
-
-
 def spheres(scene: Scene) -> list[Sphere]:
-    found = [o for o in scene.objects if isinstance(o, Sphere)]
+    for k, obj in enumerate(scene.objects):
+        if not isinstance(obj, Sphere):
+            raise KitError(f"{scene.label}: objects[{k}]: stage 1 draws spheres, not a {type(obj).__name__}")
+    found = list(scene.objects)
     if not found:
-        raise KitError(f"{scene.source or scene.name}: objects: stage 1 draws spheres, and this scene has none")
+        raise KitError(f"{scene.label}: objects: stage 1 draws spheres, and this scene has none")
     return found
 
 
 # --- calling the student's functions, with checks on what they return --------
 
 def _perspective(impl: Any, fovy: float, aspect: float, near: float, far: float) -> np.ndarray:
-    return as_array(student_call(STAGE, impl, "S1", fovy, aspect, near, far), (4, 4), "S1 perspective()")
+    return STAGE.call(impl, "S1", fovy, aspect, near, far)
 
 
 def _look_at(impl: Any, eye: Any, center: Any, up: Any) -> np.ndarray:
-    return as_array(student_call(STAGE, impl, "S2", np.array(eye, float), np.array(center, float), np.array(up, float)),
-                    (4, 4), "S2 look_at()")
+    return STAGE.call(impl, "S2", np.array(eye, float), np.array(center, float), np.array(up, float))
 
 
 def _mesh(impl: Any, radius: float, slices: int, stacks: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    out = student_call(STAGE, impl, "S3", radius, slices, stacks)
-    if not isinstance(out, (tuple, list)) or len(out) != 3:
-        raise KitError("S3 sphere_mesh() must return (positions, normals, triangles)")
-    positions = as_array(out[0], (None, 3), "S3 sphere_mesh() positions")
-    normals = as_array(out[1], (len(positions), 3), "S3 sphere_mesh() normals")
-    triangles = as_array(out[2], (None, 3), "S3 sphere_mesh() triangles", kind="i")
-    if len(triangles) and (triangles.min() < 0 or triangles.max() >= len(positions)):
-        raise KitError(f"S3 sphere_mesh() triangles index vertex {int(triangles.max())} of {len(positions)}")
-    return positions, normals, triangles
+    return STAGE.call(impl, "S3", radius, slices, stacks)
 
 
 def _shaders(impl: Any, shading: str) -> tuple[str, str]:
-    task = "S4" if shading == "gouraud" else "S5"
-    out = student_call(STAGE, impl, task)
-    if not isinstance(out, (tuple, list)) or len(out) != 2 or not all(isinstance(s, str) for s in out):
-        raise KitError(f"{task} {STAGE.task(task).function}() must return (vertex_source, fragment_source) strings")
-    return out[0], out[1]
+    return STAGE.call(impl, "S4" if shading == "gouraud" else "S5")
 
 
 def _reshape(impl: Any, width: int, height: int, camera: Camera) -> tuple[tuple[int, int, int, int], np.ndarray]:
-    out = student_call(STAGE, impl, "S6", width, height, camera)
-    if not isinstance(out, (tuple, list)) or len(out) != 2:
-        raise KitError("S6 reshape() must return (viewport, projection)")
-    viewport = as_array(out[0], (4,), "S6 reshape() viewport", kind="i")
-    return tuple(int(v) for v in viewport), as_array(out[1], (4, 4), "S6 reshape() projection")  # type: ignore[return-value]
+    viewport, projection = STAGE.call(impl, "S6", width, height, camera)
+    return tuple(int(v) for v in viewport), projection  # type: ignore[return-value]
+
+
+def _key(impl: Any, key: str, state: ViewState) -> ViewState:
+    out = STAGE.call(impl, "S7", key, state)
+    if not isinstance(out, ViewState):
+        raise KitError(f"S7 handle_key() must return a ViewState, got {type(out).__name__}")
+    return out
 
 
 # --- drawing ----------------------------------------------------------------
 
 def _light_uniforms(scene: Scene, view: np.ndarray) -> dict[str, np.ndarray]:
-    lights = [l for l in scene.lights if isinstance(l, (PointLight, DirectionalLight))]
+    lights = list(scene.lights)
+    for k, light in enumerate(lights):
+        if not isinstance(light, (PointLight, DirectionalLight)):
+            raise KitError(f"{scene.label}: lights[{k}]: stage 1 lights with point and directional lights (OpenGL "
+                           f"1.x's), not a {type(light).__name__}")
     if len(lights) > MAX_LIGHTS:
-        raise KitError(f"{scene.source}: lights: stage 1 supports at most {MAX_LIGHTS} lights (OpenGL 1.x's GL_LIGHT0..7)")
+        raise KitError(f"{scene.label}: lights: stage 1 supports at most {MAX_LIGHTS} lights (OpenGL 1.x's GL_LIGHT0..7)")
     pos = np.zeros((MAX_LIGHTS, 4))
     amb, dif, spe = (np.zeros((MAX_LIGHTS, 3)) for _ in range(3))
     att = np.tile([1.0, 0.0, 0.0], (MAX_LIGHTS, 1))
@@ -203,7 +200,7 @@ def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, shading
     Returns a linear float image (h, w, 3) in [0, 1], 8 bits deep as the original window.
     """
     given = given or {}
-    opts = options(scene)
+    opts = STAGE.options(scene)
     shading = shading or opts.shading
     width, height = size or (scene.image.width, scene.image.height)
     cam = scene.camera
@@ -227,14 +224,20 @@ def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, shading
 
 # --- probes: what the autograder's worker asks a submission for ------------------
 
+PROBES = Probes()
+
+
+@PROBES.register
 def probe_perspective(impl: Any, fovy: float, aspect: float, near: float, far: float) -> dict[str, np.ndarray]:
     return {"matrix": _perspective(impl, fovy, aspect, near, far)}
 
 
+@PROBES.register
 def probe_look_at(impl: Any, eye: list, center: list, up: list) -> dict[str, np.ndarray]:
     return {"matrix": _look_at(impl, eye, center, up)}
 
 
+@PROBES.register
 def probe_sphere_mesh(impl: Any, radius: float, slices: int, stacks: int) -> dict[str, np.ndarray]:
     positions, normals, triangles = _mesh(impl, radius, slices, stacks)
     return {"positions": positions, "normals": normals, "triangles": triangles}
@@ -243,6 +246,7 @@ def probe_sphere_mesh(impl: Any, radius: float, slices: int, stacks: int) -> dic
 PERSPECTIVE_ARGS = ("fovy", "aspect", "near", "far")
 
 
+@PROBES.register
 def probe_reshape(impl: Any, width: int, height: int, camera: dict, perspective_query: np.ndarray | None = None,
                   perspective_answer: np.ndarray | None = None) -> dict[str, np.ndarray]:
     """The submission's S6. Given the reference's S1 answer (:func:`probe_reshape_parts`), a call of the
@@ -265,6 +269,7 @@ def probe_reshape(impl: Any, width: int, height: int, camera: dict, perspective_
     return {"viewport": np.array(viewport), "projection": projection}
 
 
+@PROBES.register
 def probe_reshape_parts(impl: Any, width: int, height: int, camera: dict) -> dict[str, np.ndarray]:
     """Trusted input of a reshape test (run on the reference only): the call its S6 makes to S1, and the answer."""
     calls: list = []
@@ -280,18 +285,15 @@ def probe_reshape_parts(impl: Any, width: int, height: int, camera: dict) -> dic
     return {"perspective_query": np.asarray(args, dtype=np.float64), "perspective_answer": np.asarray(answer)}
 
 
+@PROBES.register
 def probe_handle_key(impl: Any, presses: list[tuple[str, dict]]) -> dict[str, np.ndarray]:
     """The state after each (key, state) press, as parallel arrays."""
-    states = []
-    for key, state in presses:
-        out = student_call(STAGE, impl, "S7", key, ViewState(**state))
-        if not isinstance(out, ViewState):
-            raise KitError(f"S7 handle_key() must return a ViewState, got {type(out).__name__}")
-        states.append(out)
+    states = [_key(impl, key, ViewState(**state)) for key, state in presses]
     return {"running": np.array([s.running for s in states]), "shading": np.array([s.shading for s in states]),
             "slices": np.array([s.slices for s in states]), "stacks": np.array([s.stacks for s in states])}
 
 
+@PROBES.register
 def probe_parts(impl: Any, scene: dict, size: list[int], shading: str | None = None) -> dict[str, np.ndarray]:
     """Everything but the shaders: what the autograder feeds as trusted inputs to a shader test.
 
@@ -307,6 +309,7 @@ def probe_parts(impl: Any, scene: dict, size: list[int], shading: str | None = N
     return out
 
 
+@PROBES.register
 def probe_render(impl: Any, scene: dict, size: list[int], shading: str | None = None,
                  **given_arrays: np.ndarray) -> dict[str, np.ndarray]:
     """Render ``scene``; the trusted parts arrive as arrays named as :func:`probe_parts` returns them."""
@@ -331,8 +334,6 @@ def demo(module: Any, output: Path, window: bool, frames: int | None) -> list[Pa
 
 
 STAGE = Stage(
-    name="sphere", number=1, title="The lit sphere", handout="01-sphere", tasks=TASKS, render=render,
-    probes={"perspective": probe_perspective, "look_at": probe_look_at, "sphere_mesh": probe_sphere_mesh,
-            "reshape": probe_reshape, "reshape_parts": probe_reshape_parts, "handle_key": probe_handle_key, "parts": probe_parts, "render": probe_render},
-    demo=demo,
+    name="sphere", number=1, title="The lit sphere", handout="01-sphere", tasks=TASKS, render=render, probes=PROBES,
+    demo=demo, options_type=SphereOptions, draws=(Sphere, PointLight, DirectionalLight),
 )

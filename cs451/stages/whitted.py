@@ -15,23 +15,30 @@ import numpy as np
 
 from .. import raytrace, schema
 from ..errors import KitError
-from ..scene import Camera, Scene, parse_scene
+from ..scene import AreaLight, Camera, Mesh, Plane, PointLight, Polygon, Scene, Sphere, parse_scene
 from ..schema import Context, field
-from .base import Stage, Task, as_array, functions_replaced, student_call
+from .base import Out, Probes, Stage, Task, as_array, functions_replaced
 
+RAYS = "len(origins)"
 TASKS = (
-    Task("W1", "camera_rays", "Camera rays", ("camera", "width", "height")),
-    Task("W2", "intersect_sphere", "Ray-sphere intersection", ("origins", "directions", "center", "radius")),
-    Task("W3", "intersect_triangle", "Watertight ray-triangle intersection", ("origins", "directions", "v0", "v1", "v2")),
-    Task("W4", "build_bvh", "The bounding volume hierarchy", ("lo", "hi")),
-    Task("W5", "closest_hit", "Closest hit", ("scene", "origins", "directions")),
+    Task("W1", "camera_rays", "Camera rays", ("camera", "width", "height"),
+         (Out("origins", ("width * height", 3)), Out("directions", ("width * height", 3)))),
+    Task("W2", "intersect_sphere", "Ray-sphere intersection", ("origins", "directions", "center", "radius"),
+         (Out("t0", (RAYS,), "f+inf"), Out("t1", (RAYS,), "f+inf"))),
+    Task("W3", "intersect_triangle", "Watertight ray-triangle intersection", ("origins", "directions", "v0", "v1", "v2"),
+         (Out("t", (RAYS,), "f+inf"),)),
+    Task("W4", "build_bvh", "The bounding volume hierarchy", ("lo", "hi"), (Out("hierarchy", kind="dict"),)),
+    Task("W5", "closest_hit", "Closest hit", ("scene", "origins", "directions"),
+         (Out("t", (RAYS,), "f+inf"), Out("prim", (RAYS,), "i"), Out("normals", (RAYS, 3)))),
     Task("W6", "local_shading", "Local shading", ("normals", "to_eye", "to_light", "light_diffuse", "light_specular",
-                                                  "diffuse", "specular", "shininess")),
-    Task("W7", "shadow_transmission", "Shadow rays", ("scene", "origins", "targets")),
-    Task("W8", "reflect", "Reflection", ("directions", "normals")),
-    Task("W9", "refract", "Refraction", ("directions", "normals", "eta")),
-    Task("W10", "fresnel", "Fresnel reflectance", ("cos_i", "eta")),
-    Task("W11", "trace", "Recursive tracing and the cut-off", ("scene", "origins", "directions")),
+                                                  "diffuse", "specular", "shininess"), (Out("colour", ("len(normals)", 3)),)),
+    Task("W7", "shadow_transmission", "Shadow rays", ("scene", "origins", "targets"), (Out("transmission", (RAYS, 3)),)),
+    Task("W8", "reflect", "Reflection", ("directions", "normals"), (Out("r", ("len(directions)", 3)),)),
+    Task("W9", "refract", "Refraction", ("directions", "normals", "eta"),
+         (Out("directions", kind="any"), Out("tir", ("len(directions)",), "b"))),
+    Task("W10", "fresnel", "Fresnel reflectance", ("cos_i", "eta"), (Out("f", ("len(cos_i)",)),)),
+    Task("W11", "trace", "Recursive tracing and the cut-off", ("scene", "origins", "directions"),
+         (Out("colour", (RAYS, 3)),)),
 )
 
 
@@ -49,27 +56,14 @@ class WhittedOptions:
             raise ctx.child("spp").error(f"must be a square number (1, 4, 9, 16, …), got {self.spp}")
 
 
-def options(scene: Scene, **overrides: Any) -> WhittedOptions:
-    raw = dict(scene.options.get("whitted", {}))
-    raw.update({k: v for k, v in overrides.items() if v is not None})
-    return schema.parse_record(WhittedOptions, raw, Context(scene.source or scene.name or "<scene>", "options.whitted"))
-
-
 # --- calling the student's functions, with checks on what they return --------
 
 def _camera_rays(impl: Any, camera: Camera, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
-    out = student_call(STAGE, impl, "W1", camera, width, height)
-    if not isinstance(out, (tuple, list)) or len(out) != 2:
-        raise KitError("W1 camera_rays() must return (origins, directions)")
-    n = width * height
-    return as_array(out[0], (n, 3), "W1 camera_rays() origins"), as_array(out[1], (n, 3), "W1 camera_rays() directions")
+    return STAGE.call(impl, "W1", camera, width, height)
 
 
 def _build_bvh(impl: Any, lo: np.ndarray, hi: np.ndarray) -> dict[str, np.ndarray]:
-    bvh = student_call(STAGE, impl, "W4", lo.copy(), hi.copy())
-    if not isinstance(bvh, dict):
-        raise KitError(f"W4 build_bvh() must return a dict of arrays, got {type(bvh).__name__}")
-    return bvh
+    return STAGE.call(impl, "W4", lo.copy(), hi.copy())
 
 
 def prepare(scene: Scene, impl: Any, max_depth: int | None = None, min_weight: float | None = None,
@@ -79,7 +73,7 @@ def prepare(scene: Scene, impl: Any, max_depth: int | None = None, min_weight: f
 
     ``bvh``: a trusted hierarchy (the reference's, from the grader) to use instead of the submission's W4.
     """
-    opts = options(scene, max_depth=max_depth, min_weight=min_weight, light_samples=light_samples)
+    opts = STAGE.options(scene, max_depth=max_depth, min_weight=min_weight, light_samples=light_samples)
     ts = raytrace.build(scene, opts.max_depth, opts.min_weight, opts.light_samples or None)
     use = hierarchy if hierarchy is not None else ts.n_bounded > raytrace.HIERARCHY_THRESHOLD
     if bvh is not None:
@@ -97,12 +91,12 @@ def prepare(scene: Scene, impl: Any, max_depth: int | None = None, min_weight: f
 def render_traced(scene: Scene, impl: Any, size: tuple[int, int] | None = None, spp: int | None = None,
                   **trace_options: Any) -> tuple[np.ndarray, dict[str, int]]:
     """Render with the submission's tracer; returns the linear image (h, w, 3) and the tracer's counters."""
-    opts = options(scene, spp=spp)
+    opts = STAGE.options(scene, spp=spp)
     width, height = size or (scene.image.width, scene.image.height)
     k = math.isqrt(opts.spp)
     ts = prepare(scene, impl, **trace_options)
     origins, directions = _camera_rays(impl, scene.camera, width * k, height * k)
-    colours = as_array(student_call(STAGE, impl, "W11", ts, origins, directions), (len(origins), 3), "W11 trace()")
+    colours = STAGE.call(impl, "W11", ts, origins, directions)
     image = colours.reshape(height, k, width, k, 3).mean(axis=(1, 3))
     return image, dict(ts.counters)
 
@@ -220,6 +214,8 @@ def _recorder(task: str, log: dict[str, list]) -> Callable[[Any], Any]:
 
 # --- probes: what the autograder's worker asks a submission for ------------------
 
+PROBES = Probes()
+
 def _scene(scene: dict) -> Scene:
     return parse_scene(scene, "<probe scene>")
 
@@ -228,38 +224,28 @@ def _rays(value: Any, what: str) -> np.ndarray:
     return np.asarray(value, dtype=np.float64).reshape(-1, 3)
 
 
+@PROBES.register
 def probe_camera_rays(impl: Any, camera: dict, width: int, height: int) -> dict[str, np.ndarray]:
     cam = schema.parse_record(Camera, camera, Context("<probe>", "camera"))
     origins, directions = _camera_rays(impl, cam, width, height)
     return {"origins": origins, "directions": directions}
 
 
+@PROBES.register
 def probe_intersect_sphere(impl: Any, origins: list, directions: list, center: list, radius: float) -> dict[str, np.ndarray]:
     o, d = _rays(origins, "origins"), _rays(directions, "directions")
-    out = student_call(STAGE, impl, "W2", o, d, np.asarray(center, float), float(radius))
-    if not isinstance(out, (tuple, list)) or len(out) != 2:
-        raise KitError("W2 intersect_sphere() must return (t0, t1)")
-    t0 = np.asarray(out[0], dtype=np.float64)
-    t1 = np.asarray(out[1], dtype=np.float64)
-    for name, t in (("t0", t0), ("t1", t1)):
-        if t.shape != (len(o),):
-            raise KitError(f"W2 intersect_sphere() {name} has shape {t.shape}, expected ({len(o)},)")
-        if np.isnan(t).any():
-            raise KitError(f"W2 intersect_sphere() {name} contains NaN (a miss must be inf)")
+    t0, t1 = STAGE.call(impl, "W2", o, d, np.asarray(center, float), float(radius))
     return {"t0": t0, "t1": t1}
 
 
+@PROBES.register
 def probe_intersect_triangle(impl: Any, origins: list, directions: list, v0: list, v1: list, v2: list) -> dict[str, np.ndarray]:
     o, d = _rays(origins, "origins"), _rays(directions, "directions")
     tri = [np.broadcast_to(np.asarray(v, float), o.shape).copy() for v in (v0, v1, v2)]
-    t = np.asarray(student_call(STAGE, impl, "W3", o, d, *tri), dtype=np.float64)
-    if t.shape != (len(o),):
-        raise KitError(f"W3 intersect_triangle() returned shape {t.shape}, expected ({len(o)},)")
-    if np.isnan(t).any():
-        raise KitError("W3 intersect_triangle() returned NaN (a miss must be inf)")
-    return {"t": t}
+    return {"t": STAGE.call(impl, "W3", o, d, *tri)}
 
 
+@PROBES.register
 def probe_build_bvh(impl: Any, lo: list | None = None, hi: list | None = None, scene: dict | None = None) -> dict[str, np.ndarray]:
     """The submission's hierarchy over boxes given as lists, or over a scene's primitives."""
     if scene is not None:
@@ -277,23 +263,18 @@ def probe_build_bvh(impl: Any, lo: list | None = None, hi: list | None = None, s
 
 
 def _hits(impl: Any, ts: raytrace.TraceScene, o: np.ndarray, d: np.ndarray) -> dict[str, np.ndarray]:
-    out = student_call(STAGE, impl, "W5", ts, o, d)
-    if not isinstance(out, (tuple, list)) or len(out) != 3:
-        raise KitError("W5 closest_hit() must return (t, prim, normals)")
-    t = np.asarray(out[0], dtype=np.float64)
-    if t.shape != (len(o),) or np.isnan(t).any():
-        raise KitError(f"W5 closest_hit() t must have shape ({len(o)},) without NaN (inf on a miss), got {t.shape}")
-    prim = as_array(out[1], (len(o),), "W5 closest_hit() prim", kind="i")
-    normals = as_array(out[2], (len(o), 3), "W5 closest_hit() normals")
+    t, prim, normals = STAGE.call(impl, "W5", ts, o, d)
     return {"t": t, "prim": prim, "normals": normals}
 
 
+@PROBES.register
 def probe_primary_rays(impl: Any, scene: dict, size: list[int], **_: Any) -> dict[str, np.ndarray]:
     """Trusted camera rays for a test of later tasks (run on the reference only, through ``given``)."""
     origins, directions = _camera_rays(impl, _scene(scene).camera, size[0], size[1])
     return {"origins": origins, "directions": directions}
 
 
+@PROBES.register
 def probe_hit_parts(impl: Any, scene: dict, size: list[int] | None = None, hierarchy: bool | None = None,
                     rays: dict | None = None, **opts: Any) -> dict[str, np.ndarray]:
     """Trusted inputs of a W5 or W11 test (run on the reference only): camera rays, and the reference's
@@ -305,6 +286,7 @@ def probe_hit_parts(impl: Any, scene: dict, size: list[int] | None = None, hiera
     return out
 
 
+@PROBES.register
 def probe_trace_parts(impl: Any, scene: dict, size: list[int], **opts: Any) -> dict[str, np.ndarray]:
     """Trusted inputs of a W11 test (run on the reference only): those of :func:`probe_hit_parts`, and every
     query the reference's trace put to reflect, refract and fresnel on this scene, with its answers."""
@@ -322,6 +304,7 @@ def probe_trace_parts(impl: Any, scene: dict, size: list[int], **opts: Any) -> d
     return out
 
 
+@PROBES.register
 def probe_closest_hit(impl: Any, scene: dict, size: list[int] | None = None, hierarchy: bool | None = None,
                       rays: dict | None = None, origins: np.ndarray | None = None,
                       directions: np.ndarray | None = None, **given: np.ndarray) -> dict[str, np.ndarray]:
@@ -338,47 +321,49 @@ def probe_closest_hit(impl: Any, scene: dict, size: list[int] | None = None, hie
     return out
 
 
+@PROBES.register
 def probe_local_shading(impl: Any, normals: list, to_eye: list, to_light: list, light_diffuse: list,
                         light_specular: list, diffuse: list, specular: list, shininess: list) -> dict[str, np.ndarray]:
     args = [np.asarray(a, dtype=np.float64) for a in (normals, to_eye, to_light, light_diffuse, light_specular,
                                                       diffuse, specular)]
-    n = len(args[0])
-    out = student_call(STAGE, impl, "W6", *args, np.asarray(shininess, dtype=np.float64))
-    return {"colour": as_array(out, (n, 3), "W6 local_shading()")}
+    return {"colour": STAGE.call(impl, "W6", *args, np.asarray(shininess, dtype=np.float64))}
 
 
+@PROBES.register
 def probe_shadow_transmission(impl: Any, scene: dict, origins: list, targets: list) -> dict[str, np.ndarray]:
     ts = prepare(_scene(scene), impl)
     o, x = _rays(origins, "origins"), _rays(targets, "targets")
-    out = as_array(student_call(STAGE, impl, "W7", ts, o, x), (len(o), 3), "W7 shadow_transmission()")
+    out = STAGE.call(impl, "W7", ts, o, x)
     return {"transmission": out, "shadow": np.array(ts.counters["shadow"])}
 
 
+@PROBES.register
 def probe_reflect(impl: Any, directions: list, normals: list) -> dict[str, np.ndarray]:
     d, n = _rays(directions, "directions"), _rays(normals, "normals")
-    return {"r": as_array(student_call(STAGE, impl, "W8", d, n), (len(d), 3), "W8 reflect()")}
+    return {"r": STAGE.call(impl, "W8", d, n)}
 
 
+@PROBES.register
 def probe_refract(impl: Any, directions: list, normals: list, eta: Any) -> dict[str, np.ndarray]:
     d, n = _rays(directions, "directions"), _rays(normals, "normals")
-    out = student_call(STAGE, impl, "W9", d, n, np.asarray(eta, dtype=np.float64))
-    if not isinstance(out, (tuple, list)) or len(out) != 2:
-        raise KitError("W9 refract() must return (directions, tir)")
-    tir = np.asarray(out[1])
-    if tir.shape != (len(d),) or tir.dtype.kind not in "bui":
-        raise KitError(f"W9 refract() tir must be a ({len(d)},) boolean array, got {tir.dtype} {tir.shape}")
-    t = np.asarray(out[0], dtype=np.float64)
+    directions, tir = STAGE.call(impl, "W9", d, n, np.asarray(eta, dtype=np.float64))
+    try:
+        t = np.asarray(directions, dtype=np.float64)
+    except (TypeError, ValueError):
+        t = np.zeros(0)
     if t.shape != d.shape:
-        raise KitError(f"W9 refract() directions have shape {t.shape}, expected {d.shape}")
-    t = np.where(tir.astype(bool)[:, None], 0.0, t)
-    return {"t": as_array(t, (len(d), 3), "W9 refract() directions"), "tir": tir.astype(bool)}
+        raise KitError(f"W9 refract() directions has shape {t.shape}, expected {d.shape}")
+    t = np.where(tir[:, None], 0.0, t)              # where light is reflected wholly, no direction is asked for
+    return {"t": as_array(t, (len(d), 3), "W9 refract() directions"), "tir": tir}
 
 
+@PROBES.register
 def probe_fresnel(impl: Any, cos_i: list, eta: Any) -> dict[str, np.ndarray]:
     c = np.asarray(cos_i, dtype=np.float64)
-    return {"f": as_array(student_call(STAGE, impl, "W10", c, np.asarray(eta, dtype=np.float64)), (len(c),), "W10 fresnel()")}
+    return {"f": STAGE.call(impl, "W10", c, np.asarray(eta, dtype=np.float64))}
 
 
+@PROBES.register
 def probe_render(impl: Any, scene: dict, size: list[int], origins: np.ndarray | None = None,
                  directions: np.ndarray | None = None, **opts: Any) -> dict[str, np.ndarray]:
     """Trace a scene with the submission's W11. Trusted parts (:func:`probe_trace_parts`) come in as arrays when
@@ -391,7 +376,7 @@ def probe_render(impl: Any, scene: dict, size: list[int], origins: np.ndarray | 
         origins, directions = _camera_rays(impl, sc.camera, width, height)
     answers = _answers_from(given)
     with functions_replaced(STAGE, impl, {task: a.wrap for task, a in answers.items()}):
-        colours = as_array(student_call(STAGE, impl, "W11", ts, origins, directions), (len(origins), 3), "W11 trace()")
+        colours = STAGE.call(impl, "W11", ts, origins, directions)
     out = {"image": colours.reshape(height, width, 3)}
     out.update({k: np.array(v) for k, v in ts.counters.items()})
     return out
@@ -399,10 +384,5 @@ def probe_render(impl: Any, scene: dict, size: list[int], origins: np.ndarray | 
 
 STAGE = Stage(
     name="whitted", number=2, title="Whitted ray tracing", handout="02-whitted", tasks=TASKS, render=render,
-    probes={"camera_rays": probe_camera_rays, "intersect_sphere": probe_intersect_sphere,
-            "intersect_triangle": probe_intersect_triangle, "build_bvh": probe_build_bvh,
-            "primary_rays": probe_primary_rays, "hit_parts": probe_hit_parts, "trace_parts": probe_trace_parts,
-            "closest_hit": probe_closest_hit, "local_shading": probe_local_shading,
-            "shadow_transmission": probe_shadow_transmission, "reflect": probe_reflect, "refract": probe_refract,
-            "fresnel": probe_fresnel, "render": probe_render},
+    probes=PROBES, options_type=WhittedOptions, draws=(Sphere, Plane, Polygon, Mesh, PointLight, AreaLight),
 )

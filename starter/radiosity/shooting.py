@@ -1,7 +1,7 @@
 """R2-R4: progressive refinement radiosity (Cohen, Chen, Wallace & Greenberg 1988).
 
 Every array has one row per patch and, for colours, three columns (red, green, blue):
-areas (n,), reflectance (n, 3) in [0, 1), emission (n, 3), radiosity and unshot radiosity (n, 3).
+areas (n,), reflectance (n, 3) in [0, 1], emission (n, 3), radiosity and unshot radiosity (n, 3).
 A row of form factors is (n,): ``row[j]`` is F_ij, the fraction of the energy leaving patch i
 that reaches patch j.
 """
