@@ -7,5 +7,23 @@ from pathlib import Path
 
 __version__ = "0.1.0"
 
-#: The kit checkout this package lives in (reference/, starter/, autograder/ are beside it).
-KIT_ROOT = Path(__file__).resolve().parent.parent
+#: The engine's own folder (what the grader copies into a sandbox and a release ships).
+ENGINE_DIR = Path(__file__).resolve().parent
+
+
+def _kit_root() -> Path:
+    """Where reference/, starter/, autograder/ and the handouts are.
+
+    In a checkout, an editable install or a student's release, the folder above the engine (it holds
+    pyproject.toml). In an installed wheel (``pip install .``), the ``cs451_kit`` folder the wheel puts
+    beside the engine (see setup.py).
+    """
+    beside = ENGINE_DIR.parent
+    if (beside / "pyproject.toml").is_file():
+        return beside
+    installed = beside / "cs451_kit"
+    return installed if (installed / "KIT").is_file() else beside
+
+
+#: The kit this engine serves: a checkout, a student's release, or the kit an installed wheel carries.
+KIT_ROOT = _kit_root()

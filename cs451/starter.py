@@ -87,8 +87,14 @@ def _existing_files(starter: Path) -> dict[str, str]:
             if p.is_file() and not any(part in SKIP_NAMES for part in p.parts) and p.suffix != ".pyc"}
 
 
+def _require_reference(reference: Path) -> None:
+    if not reference.is_dir():
+        raise KitError(f"{reference}: no reference solutions here; `cs451 starter` runs in the instructor's kit")
+
+
 def check_starter(reference: Path = KIT_ROOT / "reference", starter: Path = KIT_ROOT / "starter") -> list[Drift]:
     """Where starter/ differs from what reference/ generates (empty when in step)."""
+    _require_reference(reference)
     want, have = _expected_files(reference), _existing_files(starter)
     drift = [Drift(p, "missing") for p in want if p not in have]
     drift += [Drift(p, "not generated from reference/ (remove it or add it to reference/)") for p in have if p not in want]
@@ -99,6 +105,7 @@ def check_starter(reference: Path = KIT_ROOT / "reference", starter: Path = KIT_
 
 def generate_starter(reference: Path = KIT_ROOT / "reference", starter: Path = KIT_ROOT / "starter") -> list[str]:
     """Rewrite starter/ from reference/; returns the files written."""
+    _require_reference(reference)
     files = _expected_files(reference)  # parse everything first: a bad marker leaves starter/ untouched
     if starter.exists():
         shutil.rmtree(starter)

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import KIT_ROOT
+from .. import ENGINE_DIR, KIT_ROOT
 from ..errors import KitError
 from .spec import TRUTH_MODULES, Outputs, Ref, Test
 
@@ -85,7 +85,7 @@ class ReferenceAnswers:
             return
         from ..impl import resolve_impl
         self.impl = resolve_impl("reference", stage)
-        version = tree_hash(self.impl, KIT_ROOT / "cs451")
+        version = tree_hash(self.impl, ENGINE_DIR)
         self.dir = cache_root(cache_dir) / "reference" / stage / version
         self.dir.mkdir(parents=True, exist_ok=True)
 
@@ -122,7 +122,7 @@ class TruthValues:
             self.live, self.dir = False, packaged_answers_dir(stage)
             return
         self.live = True
-        version = tree_hash(KIT_ROOT / "autograder", KIT_ROOT / "cs451")
+        version = tree_hash(KIT_ROOT / "autograder", ENGINE_DIR)
         self.dir = cache_root(cache_dir) / "truth" / stage / version
         self.dir.mkdir(parents=True, exist_ok=True)
 

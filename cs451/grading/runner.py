@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import KIT_ROOT
+from .. import ENGINE_DIR, KIT_ROOT
 from ..errors import KitError, SubmissionError
 from ..impl import resolve_impl
 from ..progress import Progress
@@ -89,7 +89,7 @@ def run_trusted_probe(stage: str, impl_dir: Path, probe: str, params: dict[str, 
         job.mkdir()
         _write_request(job, stage, str(impl_dir), probe, params, inputs)
         done = sandbox.run_trusted([sys.executable, "-m", "cs451.grading.worker", str(job)], job,
-                                   sandbox.Limits(wall_seconds=timeout), engine=KIT_ROOT)
+                                   sandbox.Limits(wall_seconds=timeout), engine=ENGINE_DIR.parent)
         return _interpret(done, job, timeout, time.perf_counter() - start)
 
 
@@ -178,7 +178,7 @@ def protected_paths(extra: tuple[Path, ...] = ()) -> list[Path]:
 
 def engine_sources(stage: str) -> list[tuple[Path, str]]:
     """What the worker imports: the engine, and the references of the earlier stages this one builds on."""
-    sources = [(KIT_ROOT / "cs451", "cs451")]
+    sources = [(ENGINE_DIR, "cs451")]
     for earlier in get_stage(stage).builds_on:
         folder = KIT_ROOT / "reference" / earlier
         if folder.is_dir():

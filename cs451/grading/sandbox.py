@@ -558,12 +558,18 @@ class Sandbox:
                 args += ["--ro-bind", str(path), str(path)]
         args += ["--ro-bind", "/usr", "/usr", "--ro-bind", "/etc", "/etc"]
         venv = os.path.dirname(os.path.dirname(sys.executable))   # as invoked: it may be a link to the prefix
+        bound = ["/usr", "/etc"]
         for prefix in sorted({sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix, venv}):
             if not prefix.startswith("/usr/") and prefix != "/usr":
                 args += ["--ro-bind", prefix, prefix]
+                bound.append(prefix)
         for lib in os.environ.get("LD_LIBRARY_PATH", "").split(":"):
             if lib and os.path.isdir(lib) and not lib.startswith("/usr/"):
                 args += ["--ro-bind", lib, lib]
+                bound.append(lib)
+        for path in self.protected:   # a kit installed in the venv (a wheel) lies inside a bound prefix: cover it
+            if any(Path(path).is_relative_to(b) for b in bound) and os.path.isdir(path) and not os.path.islink(path):
+                args += ["--perms", "0000", "--tmpfs", str(path)]        # an empty folder no one may open
         args += ["--ro-bind", str(self.engine), "/kit", "--ro-bind", str(self.run_dir / "upload"), "/submission",
                  "--bind", str(job), "/job", "--chdir", "/job", "--clearenv"]
         for key, value in worker_env("/job", "/kit").items():

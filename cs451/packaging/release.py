@@ -14,7 +14,7 @@ import json
 import shutil
 from pathlib import Path
 
-from .. import KIT_ROOT, __version__
+from .. import ENGINE_DIR, KIT_ROOT, __version__
 from ..copy import MARKER
 from ..errors import KitError
 from ..grading.loader import hidden_summary, load_tests, write_manifest
@@ -195,7 +195,7 @@ def build_release(stage: str, output: str | Path, include_reference: tuple[str, 
     workflow.write_text(workflow_text(stage))
     hidden_line = (f"After the deadline, {hidden['count']} hidden tests ({hidden['points']:g} points) check the "
                    "same tasks on scenes and parameters you have not seen." if hidden["count"] else "")
-    scene = stage if (KIT_ROOT / "cs451" / "scenes" / f"{stage}.json").exists() else "cornell-box"
+    scene = stage if (ENGINE_DIR / "scenes" / f"{stage}.json").exists() else "cornell-box"
     (out / "README.md").write_text(README.format(title=st.title, number=st.number, stage=stage, scene=scene,
                                                  handout=f"assignments/{st.handout}/README.md", hidden=hidden_line))
     (out / MARKER).write_text(json.dumps({"stage": stage, "kit_version": __version__,
