@@ -264,7 +264,7 @@ def compare_with_mitsuba(ref: Any, quick: bool) -> dict | None:
     size = (128, 128) if quick else (256, 256)
     spp = 64 if quick else 512
     start = time.perf_counter()
-    ours = R.render(scene, ref, size, verbose=False)
+    ours = R.render(scene, ref, size, quiet=True)
     ours_seconds = time.perf_counter() - start
     start = time.perf_counter()
     theirs = mitsuba_cornell(scene, size, spp, max_depth=64)

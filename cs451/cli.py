@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import traceback
 from pathlib import Path
 
 from . import __version__
@@ -149,6 +150,7 @@ def build_parser() -> argparse.ArgumentParser:
     what = f"stage {mine}" if mine else "the course's stages"
     p = argparse.ArgumentParser(prog="cs451", description=f"cs451-kit: render and grade {what}.")
     p.add_argument("--version", action="version", version=f"cs451-kit {__version__}")
+    p.add_argument("-v", "--verbose", action="store_true", help="print every counter of a job, not only its summary")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     yours = "your package (this repository's)" if mine else "reference"
 
@@ -239,12 +241,32 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _joined_values(argv: list[str]) -> list[str]:
+    """``--size -5x10`` as ``--size=-5x10``, so that argparse reports the bad size, not a missing one."""
+    out: list[str] = []
+    for token in argv:
+        if out and out[-1] in VALUE_OPTIONS and token[:1] == "-" and token[1:2].isdigit():
+            out[-1] = f"{out[-1]}={token}"
+        else:
+            out.append(token)
+    return out
+
+
+VALUE_OPTIONS = {"--size", "--frames", "-j", "--jobs"}
+
+
 def main(argv: list[str] | None = None) -> int:
+    argv = _joined_values(list(sys.argv[1:] if argv is None else argv))
     args = build_parser().parse_args(argv)
+    from .progress import set_verbose
+    set_verbose(getattr(args, "verbose", False))
     try:
         return args.func(args)
     except KitError as err:
         print(f"cs451: error: {err}", file=sys.stderr)
+        return 2
+    except MemoryError:
+        print("cs451: error: out of memory (the job's estimate missed it: please report the command)", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("cs451: interrupted", file=sys.stderr)
@@ -255,6 +277,13 @@ def main(argv: list[str] | None = None) -> int:
         except OSError:
             pass
         return 0
+    except Exception as err:   # a bug in the kit, never the user's input: one line, the traceback on request
+        if os.environ.get("CS451_TRACEBACK"):
+            raise
+        where = traceback.extract_tb(err.__traceback__)[-1]
+        print(f"cs451: internal error: {type(err).__name__}: {err} (at {Path(where.filename).name}:{where.lineno}; "
+              f"a bug in the kit: please report it, with CS451_TRACEBACK=1 for the whole traceback)", file=sys.stderr)
+        return 3
 
 
 if __name__ == "__main__":

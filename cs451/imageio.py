@@ -26,12 +26,31 @@ def to_uint8(image: np.ndarray, exposure: float = 1.0, srgb: bool = False) -> np
     return np.round(x * 255.0).astype(np.uint8)
 
 
+def check_output(path: str | Path, option: str = "-o") -> Path:
+    """Refuse, before any work, an output that cannot become a PNG file: a folder, another type, a file in the way."""
+    text = str(path)
+    path = Path(path)
+    if text.endswith(("/", "\\")) or path.is_dir():
+        raise KitError(f"{option} {text}: is a folder; give a file name such as {path / 'image.png'}")
+    if path.suffix.lower() != ".png":
+        raise KitError(f"{option} {text}: images are written as PNG; give a name ending in .png")
+    for parent in path.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise KitError(f"{option} {text}: {parent} is a file, not a folder")
+            break
+    return path
+
+
 def save_png(path: str | Path, image: np.ndarray, exposure: float = 1.0, srgb: bool = False) -> Path:
     """Write a linear float image (or a uint8 image as it is) as PNG, creating folders as needed."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    path = check_output(path)
     data = image if image.dtype == np.uint8 else to_uint8(image, exposure, srgb)
-    PILImage.fromarray(data[..., :3]).save(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        PILImage.fromarray(data[..., :3]).save(path)
+    except OSError as err:
+        raise KitError(f"{path}: cannot write the image ({err.strerror or err})") from None
     return path
 
 

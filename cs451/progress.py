@@ -12,6 +12,17 @@ from tqdm import tqdm
 
 T = TypeVar("T")
 
+_verbose = [False]
+
+
+def set_verbose(on: bool) -> None:
+    """``--verbose``: jobs print their counters, not only a one-line summary."""
+    _verbose[0] = bool(on)
+
+
+def verbose() -> bool:
+    return _verbose[0]
+
 
 class Progress:
     """``label:  40%|████      | 4/10 [00:02<00:03] S3.1`` once the work has run past ``delay`` seconds."""

@@ -6,6 +6,7 @@ from pathlib import Path
 
 from .errors import KitError
 from .imageio import save_png
+from .limits import check_image_size
 from .impl import load_impl, resolve_impl
 from .scene import load_scene
 from .stages import get_stage, stage_names
@@ -19,8 +20,11 @@ def parse_size(text: str | None) -> tuple[int, int] | None:
         w, h = (int(v) for v in text.lower().split("x"))
     except ValueError:
         raise KitError(f"--size: expected WIDTHxHEIGHT such as 640x480, got {text!r}") from None
-    if w <= 0 or h <= 0 or w * h > 64_000_000:
+    if w <= 0 or h <= 0:
         raise KitError(f"--size: {w}x{h} is not a usable image size")
+    problem = check_image_size(w, h, "--size")
+    if problem:
+        raise KitError(problem)
     return w, h
 
 
@@ -36,11 +40,16 @@ def render_scene(*, scene: str, output: str | Path, impl: str = "reference", siz
                  stage: str | None = None, shading: str | None = None) -> tuple[Path, float]:
     """Render ``scene`` (a bundled name or a JSON path) and write ``output``; returns the path and seconds."""
     from .copy import student_stage
+    from .imageio import check_output
+    check_output(output)
     sc = load_scene(scene)
     st = get_stage(stage or student_stage() or infer_stage(sc))
     st.check_scene(sc)
+    st.check_cost(sc, parse_size(size))
     module = load_impl(resolve_impl(impl, st.name), st.name)
     start = time.perf_counter()
+    if shading and "shading" not in getattr(st.options_type, "__dataclass_fields__", {}):
+        raise KitError(f"--shading: stage {st.number} ({st.name}) has no shading option (stage 1 has)")
     kwargs = {"shading": shading} if shading else {}
     image = st.render(sc, module, parse_size(size), **kwargs)
     seconds = time.perf_counter() - start

@@ -30,6 +30,18 @@ class Image:
     exposure: float = field("Linear colours are multiplied by this before encoding.", 1.0, schema.positive)
     srgb: bool = field("Encode with the sRGB curve when writing 8-bit images (false: write linear values, as OpenGL 1.x did).", False)
 
+    def validate(self, ctx: Context) -> None:
+        from .limits import check_image_size
+        problem = check_image_size(self.width, self.height, "the image")
+        if problem:
+            raise ctx.child("width").error(problem)
+
+
+#: the narrowest field of view (and 180° less it, the widest), in degrees
+MIN_FOVY = 0.01
+#: the largest far/near ratio: a 24-bit depth buffer loses all precision past about 10⁶
+MAX_DEPTH_RATIO = 1e6
+
 
 @dataclass(frozen=True)
 class Camera:
@@ -41,10 +53,14 @@ class Camera:
     far: float = field("Far clipping distance (> near).", 1000.0, schema.positive)
 
     def validate(self, ctx: Context) -> None:
-        if not 0 < self.fovy < 180:
-            raise ctx.child("fovy").error(f"must lie strictly between 0 and 180 degrees, got {self.fovy}")
+        if not MIN_FOVY <= self.fovy <= 180 - MIN_FOVY:
+            raise ctx.child("fovy").error(f"must lie between {MIN_FOVY} and {180 - MIN_FOVY} degrees (the projection's "
+                                          f"scale is cot(fovy/2)), got {self.fovy}")
         if self.far <= self.near:
             raise ctx.child("far").error(f"must be greater than near ({self.near}), got {self.far}")
+        if self.far / self.near > MAX_DEPTH_RATIO:
+            raise ctx.child("far").error(f"must be at most {MAX_DEPTH_RATIO:g} × near (a depth buffer cannot tell "
+                                         f"depths apart beyond that), got far/near = {self.far / self.near:.3g}")
         view = [c - e for c, e in zip(self.center, self.eye)]
         if not any(view):
             raise ctx.child("center").error("must differ from eye")
@@ -133,6 +149,11 @@ class Plane(Object):
     checker_material: str = field("Material of the odd squares of the checkerboard.", "default")
 
 
+#: how far a polygon's corner may lie off its plane, as a fraction of its size (the Cornell box's
+#: measured walls are off by up to 0.14%)
+NON_PLANAR = 0.01
+
+
 @Object.register("polygon")
 @dataclass(frozen=True)
 class Polygon(Object):
@@ -150,6 +171,12 @@ class Polygon(Object):
         scale = max(float(np.ptp(v, axis=0).max()), 1e-300)
         if np.linalg.norm(n) <= 1e-12 * scale * scale:
             raise ctx.child("vertices").error("degenerate polygon (zero area: repeated or collinear vertices)")
+        off = np.abs((v - v.mean(axis=0)) @ (n / np.linalg.norm(n)))   # distances from the mean plane
+        if off.max() > NON_PLANAR * scale:
+            k = int(off.argmax())
+            raise ctx.child("vertices").child(k).error(
+                f"the polygon is not planar: this corner is {off[k]:.4g} off its plane, {off[k] / scale:.1%} of the "
+                f"polygon's size (at most {NON_PLANAR:.0%}; split it into triangles)")
 
 
 @Object.register("mesh")

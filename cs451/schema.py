@@ -28,6 +28,12 @@ def field(doc: str, default: Any = _MISSING, check: Callable[[Any], str | None] 
     return dataclasses.field(default=default, metadata=meta)
 
 
+#: the largest number a scene may hold: a coordinate of 1e15 still squares to a finite 1e30
+MAX_MAGNITUDE = 1e15
+#: the largest integer (GL's and numpy's 32-bit counts)
+MAX_INTEGER = 2**31 - 1
+
+
 # --- checks -----------------------------------------------------------------
 
 def positive(x: Any) -> str | None:
@@ -115,13 +121,16 @@ def parse_value(tp: Any, data: Any, ctx: Context) -> Any:
             raise ctx.error(f"must be a number, got {data!r}")
         if not math.isfinite(data):
             raise ctx.error(f"must be a finite number, got {data!r}")
+        if abs(data) > MAX_MAGNITUDE:
+            raise ctx.error(f"must lie within ±{MAX_MAGNITUDE:g} (squares of larger numbers overflow), got {data!r}")
         return float(data)
     if tp is int:
-        if isinstance(data, bool) or not isinstance(data, int):
-            if isinstance(data, float) and data.is_integer():
-                return int(data)
+        if isinstance(data, bool) or not isinstance(data, (int, float)) or \
+                (isinstance(data, float) and not data.is_integer()):
             raise ctx.error(f"must be an integer, got {data!r}")
-        return data
+        if abs(data) > MAX_INTEGER:
+            raise ctx.error(f"must be an integer of at most {MAX_INTEGER:,}, got {data!r}")
+        return int(data)
     if tp is str:
         if not isinstance(data, str):
             raise ctx.error(f"must be a string, got {data!r}")
@@ -205,7 +214,7 @@ class Tagged:
         if not isinstance(data, dict):
             raise ctx.error(f"must be an object, got {type(data).__name__}")
         kind = data.get("type")
-        if kind not in cls._registry:
+        if not isinstance(kind, str) or kind not in cls._registry:
             known = ", ".join(sorted(cls._registry))
             raise ctx.child("type").error(f"unknown {cls.__name__.lower()} type {kind!r} (known types: {known})")
         body = {k: v for k, v in data.items() if k != "type"}

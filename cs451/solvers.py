@@ -54,12 +54,18 @@ class Solution:
     counters: dict[str, int] = dc_field(default_factory=dict)
 
     @property
-    def message(self) -> str:
+    def summary(self) -> str:
+        """One line: the method, whether it converged, its steps, residual and time."""
         what = "shots" if self.method == "progressive" else "sweeps" if self.method != "direct" else "solve"
         state = "converged" if self.converged else "did NOT converge (best state returned)"
-        counters = ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in self.counters.items())
         return (f"radiosity {self.method}: {state} after {self.steps} {what}, residual {self.residual:.3g} of the "
-                f"emitted energy, {self.seconds:.2f} s" + (f"; {counters}" if counters else ""))
+                f"emitted energy, {self.seconds:.2f} s")
+
+    @property
+    def message(self) -> str:
+        """The summary and every counter (``--verbose``)."""
+        counters = ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in self.counters.items())
+        return self.summary + (f"; {counters}" if counters else "")
 
 
 def energy(values: np.ndarray, areas: np.ndarray) -> float:

@@ -157,8 +157,10 @@ def build_release(stage: str, output: str | Path, include_reference: tuple[str, 
     """
     st = get_stage(stage)
     out = Path(output)
+    if out.exists() and not out.is_dir():
+        raise KitError(f"-o {out}: is a file, not a folder; choose a new folder")
     if out.exists() and any(out.iterdir()):
-        raise KitError(f"{out}: exists and is not empty; choose a new folder")
+        raise KitError(f"-o {out}: exists and is not empty; choose a new folder")
     unknown = [s for s in include_reference if s not in st.builds_on]
     if unknown:
         raise KitError(f"--include-reference {', '.join(unknown)}: stage {stage} builds on "

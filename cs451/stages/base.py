@@ -76,6 +76,9 @@ class Stage:
     options_type: type | None = None
     #: the kinds of scene object and light the stage draws; a scene holding others is refused, naming them
     draws: tuple[type, ...] = ()
+    #: estimate(scene, size) -> list of cs451.limits.Cost: the memory a render of the scene needs, from its
+    #: parameters alone (see :meth:`check_cost`)
+    estimate: Callable[..., list] | None = None
 
     def task(self, task_id: str) -> Task:
         for t in self.tasks:
@@ -103,6 +106,12 @@ class Stage:
                     kinds = sorted({_kind(c) for c in self.draws})
                     raise KitError(f"{scene.label}: {group}[{k}]: stage {self.number} ({self.name}) does not draw a "
                                    f"{_kind(type(item))} (it draws: {', '.join(kinds)})")
+
+    def check_cost(self, scene: Any, size: tuple[int, int] | None = None) -> None:
+        """Refuse, before any work, a render of ``scene`` that would not fit in this machine's memory budget."""
+        from ..limits import refuse_over_budget
+        if self.estimate is not None:
+            refuse_over_budget(scene.label, self.estimate(scene, size))
 
     def trusted(self, earlier: str) -> Any:
         """The implementation of an earlier stage this one builds on, loaded (:func:`cs451.impl.earlier_stage_impl`)."""

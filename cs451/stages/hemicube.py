@@ -105,6 +105,22 @@ def calls(impl: Any) -> Any:
     return _Calls(impl)
 
 
+# --- what a render costs ----------------------------------------------------
+
+#: bytes per hemicube cell (top face and four half sides: 3 r² cells): ids, depth and weights
+CELL_BYTES = 16
+
+
+def hemicube_bytes(resolution: int, batch: int = 1) -> float:
+    return float(CELL_BYTES) * 3 * resolution * resolution * batch
+
+
+def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
+    from ..limits import Cost
+    r = STAGE.options(scene).resolution
+    return [Cost("options.hemicube.resolution", hemicube_bytes(r), f"a hemicube of resolution {r}")]
+
+
 # --- rendering --------------------------------------------------------------
 
 def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, **_: Any) -> np.ndarray:
@@ -229,5 +245,5 @@ def probe_item_buffer(impl: Any, quads: list, patch: int, resolution: int, **giv
 
 STAGE = Stage(
     name="hemicube", number=3, title="Hemi-cube form factors", handout="03-hemicube", tasks=TASKS, render=render,
-    probes=PROBES, options_type=HemicubeOptions, draws=(Polygon, AreaLight),
+    probes=PROBES, options_type=HemicubeOptions, draws=(Polygon, AreaLight), estimate=estimate,
 )

@@ -12,10 +12,12 @@ directly comparable with a path tracer.
 """
 from __future__ import annotations
 
+import contextlib
+import math
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Literal
+from typing import Any, Callable, Iterator, Literal
 
 import numpy as np
 
@@ -184,13 +186,43 @@ def hemicube_formfactors(quads: np.ndarray, resolution: int = 128, proximity: st
                                batch=batch, seed=seed, resample_blind=RESAMPLE_BLIND)
 
 
-def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, verbose: bool = True, **overrides: Any) -> np.ndarray:
-    """Subdivide, solve and draw a scene with an implementation; returns linear radiance (h, w, 3)."""
+@contextlib.contextmanager
+def shooting_progress(patches: Patches, opts: RadiosityOptions) -> Iterator[Callable | None]:
+    """An ``on_shot`` that moves a bar from the emitted energy to the tolerance (on a log scale)."""
+    from ..progress import Progress
+    emitted = solvers.energy(patches.emission, patches.areas)
+    if opts.solver != "progressive" or emitted <= 0:
+        yield None
+        return
+    bar = Progress("radiosity: shooting", 100, unit="%")
+    stop = math.log(opts.tolerance)
+
+    def on_shot(shots: int, i: int, radiosity: np.ndarray, unshot: np.ndarray) -> None:
+        if shots % 32:
+            return
+        left = solvers.energy(np.asarray(unshot), patches.areas) / emitted
+        done = 100 if left <= opts.tolerance else int(100 * max(0.0, math.log(max(left, 1e-300)) / stop))
+        bar.advance(max(0, min(done, 100) - bar.bar.n), note=f"{shots} shots")
+    try:
+        yield on_shot
+    finally:
+        bar.close()
+
+
+def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, quiet: bool = False,
+           **overrides: Any) -> np.ndarray:
+    """Subdivide, solve and draw a scene with an implementation; returns linear radiance (h, w, 3).
+
+    Prints a one-line summary (every counter with ``--verbose``, nothing when ``quiet``) and shows the
+    shooting's progress toward the tolerance.
+    """
+    from ..progress import verbose
     opts = STAGE.options(scene, **overrides)
     patches = make_patches(scene, impl, opts.patch_size)
-    sol = solve(patches, impl, opts)
-    if verbose:
-        print(("" if sol.converged else "warning: ") + sol.message, file=sys.stderr)
+    with shooting_progress(patches, opts) as on_shot:
+        sol = solve(patches, impl, opts, on_shot=on_shot)
+    if not quiet:
+        print(("" if sol.converged else "warning: ") + (sol.message if verbose() else sol.summary), file=sys.stderr)
     return draw_solution(scene, impl, patches, sol.display, size, opts.exposure)
 
 
@@ -298,6 +330,34 @@ def demo(module: Any, output: Path, window: bool, frames: int | None) -> list[Pa
     return radiosity_demo(module, output, window, frames)
 
 
+#: bytes per patch beyond its row of form factors: geometry, solver state, vertices (with margin)
+PATCH_BYTES = 4096
+
+
+def patch_count(scene: Scene, patch_size: float) -> float:
+    """How many patches R1's rule (handout §R1: ⌈longest opposite edge / max_edge⌉ each way) makes of the scene."""
+    from ..patches import scene_polygons
+    quads, _, _ = scene_polygons(scene)
+    if patch_size <= 0:
+        return float(len(quads))
+    edge = lambda a, b: np.linalg.norm(quads[:, a] - quads[:, b], axis=1)
+    nu = np.maximum(1, np.ceil(np.maximum(edge(1, 0), edge(2, 3)) / patch_size))
+    nv = np.maximum(1, np.ceil(np.maximum(edge(3, 0), edge(2, 1)) / patch_size))
+    return float((nu * nv).sum())
+
+
+def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
+    from ..limits import Cost
+    from .hemicube import hemicube_bytes
+    opts = STAGE.options(scene)
+    n = patch_count(scene, opts.patch_size)
+    batch = 1 if opts.solver == "progressive" else 256
+    return [Cost("options.radiosity.patch_size", 8.0 * n * n + PATCH_BYTES * n,
+                 f"{n:,.0f} patches and their form factors (patch_size {opts.patch_size:g})"),
+            Cost("options.radiosity.resolution", hemicube_bytes(opts.resolution, batch),
+                 f"{batch} hemicube(s) of resolution {opts.resolution} at a time")]
+
+
 STAGE = Stage(
     name="radiosity", number=4, title="Progressive refinement radiosity", handout="04-radiosity", tasks=TASKS,
     render=render,
@@ -306,5 +366,6 @@ STAGE = Stage(
     builds_on=("hemicube",),
     options_type=RadiosityOptions,
     draws=(Polygon, AreaLight),
+    estimate=estimate,
 )
 

@@ -333,7 +333,22 @@ def demo(module: Any, output: Path, window: bool, frames: int | None) -> list[Pa
     return sphere_demo(module, output, window, frames)
 
 
+#: bytes per slice × stack cell of a sphere's mesh, measured on the reference (184 at 2000 × 2000) with margin
+MESH_CELL_BYTES = 256
+
+
+def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
+    from ..limits import Cost
+    w, h = size or (scene.image.width, scene.image.height)
+    costs = [Cost("image.width", 64.0 * w * h, f"a {w}x{h} image")]
+    for k, obj in enumerate(scene.objects):
+        if isinstance(obj, Sphere):
+            costs.append(Cost(f"objects[{k}].slices", MESH_CELL_BYTES * obj.slices * obj.stacks,
+                              f"a mesh of {obj.slices} × {obj.stacks} cells"))
+    return costs
+
+
 STAGE = Stage(
     name="sphere", number=1, title="The lit sphere", handout="01-sphere", tasks=TASKS, render=render, probes=PROBES,
-    demo=demo, options_type=SphereOptions, draws=(Sphere, PointLight, DirectionalLight),
+    demo=demo, options_type=SphereOptions, draws=(Sphere, PointLight, DirectionalLight), estimate=estimate,
 )

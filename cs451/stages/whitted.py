@@ -54,6 +54,23 @@ class WhittedOptions:
     def validate(self, ctx: Context) -> None:
         if math.isqrt(self.spp) ** 2 != self.spp:
             raise ctx.child("spp").error(f"must be a square number (1, 4, 9, 16, …), got {self.spp}")
+        if self.max_depth > MAX_DEPTH:
+            raise ctx.child("max_depth").error(f"must be at most {MAX_DEPTH} (each bounce is a pass over every ray "
+                                               f"still alive), got {self.max_depth}")
+
+
+#: the deepest recursion a scene may ask for
+MAX_DEPTH = 64
+#: bytes per camera ray of a frame (its sub-pixel samples included), measured on the reference: 100-110 at
+#: 320 × 240 with 16 and 64 samples per pixel; with margin
+RAY_BYTES = 160
+
+
+def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
+    from ..limits import Cost
+    w, h = size or (scene.image.width, scene.image.height)
+    spp = STAGE.options(scene).spp
+    return [Cost("options.whitted.spp", RAY_BYTES * w * h * spp, f"{w * h * spp:,} camera rays ({w}x{h}, {spp} per pixel)")]
 
 
 # --- calling the student's functions, with checks on what they return --------
@@ -385,4 +402,5 @@ def probe_render(impl: Any, scene: dict, size: list[int], origins: np.ndarray | 
 STAGE = Stage(
     name="whitted", number=2, title="Whitted ray tracing", handout="02-whitted", tasks=TASKS, render=render,
     probes=PROBES, options_type=WhittedOptions, draws=(Sphere, Plane, Polygon, Mesh, PointLight, AreaLight),
+    estimate=estimate,
 )

@@ -1,0 +1,145 @@
+"""No traceback from any input: scene files mutated at random, and command lines made of bad values.
+
+Every outcome must be a drawn image or a one-line error naming the file (exit 2). The mutations are
+seeded, so a failure here is reproducible by its case number; the work is bounded (small images, and
+renders only for the stages that draw in well under a second).
+"""
+from __future__ import annotations
+
+import copy
+import json
+import random
+from pathlib import Path
+
+import pytest
+
+from cs451.cli import main
+from cs451.errors import KitError
+from cs451.render import render_scene
+from cs451.scene import BUNDLED_DIR, bundled_scenes, load_scene
+from cs451.stages import get_stage, stage_names
+
+VALUES = [None, True, False, 0, -1, 1, 2, 0.5, -0.0, 1e-300, 1e15, 1e16, 1e30, -1e308, 2**31, 2**64, float("nan"),
+          float("inf"), "", "x", "sphere", [], [1], [1, 2], [0, 0, 0], [1e308, 0, 0], [[0, 0, 0]] * 3, {}, {"type": "x"},
+          {"type": "sphere", "radius": 1}, {"type": "point", "position": [0, 0, 0]}]
+CASES = 300
+RENDERED_STAGES = ("sphere", "whitted")
+
+
+def paths(data, prefix=()):
+    """Every place in a JSON tree: (path, value)."""
+    yield prefix, data
+    if isinstance(data, dict):
+        for k, v in data.items():
+            yield from paths(v, prefix + (k,))
+    elif isinstance(data, list):
+        for i, v in enumerate(data):
+            yield from paths(v, prefix + (i,))
+
+
+def mutate(data: dict, rng: random.Random) -> dict:
+    data = copy.deepcopy(data)
+    places = [p for p, _ in paths(data) if p]
+    for _ in range(rng.choice((1, 1, 2, 3))):
+        path = rng.choice(places)
+        parent = data
+        for key in path[:-1]:
+            parent = parent[key]
+        key, action = path[-1], rng.random()
+        try:
+            if action < 0.15 and isinstance(parent, dict):
+                del parent[key]
+            elif action < 0.25 and isinstance(parent, dict):
+                parent[f"unknown_{rng.randint(0, 9)}"] = rng.choice(VALUES)
+            elif action < 0.35 and isinstance(parent[key], (int, float)) and not isinstance(parent[key], bool):
+                parent[key] = parent[key] * rng.choice((-1, 0, 1e6, 1e-6, 1e12))
+            else:
+                parent[key] = copy.deepcopy(rng.choice(VALUES))
+        except (KeyError, IndexError, TypeError):
+            continue
+    return data
+
+
+def one_line(err: KitError, name: str) -> None:
+    text = str(err)
+    assert "\n" not in text and name in text, text
+
+
+@pytest.fixture(scope="module")
+def originals():
+    return {n: json.loads((BUNDLED_DIR / f"{n}.json").read_text()) for n in bundled_scenes()}
+
+
+@pytest.mark.filterwarnings("error::RuntimeWarning")   # an overflow is a silently wrong image
+def test_mutated_scenes_are_drawn_or_refused_in_one_line(originals, tmp_path):
+    rng = random.Random(451)
+    refused = drawn = 0
+    names = sorted(originals)
+    for case in range(CASES):
+        name = names[case % len(names)]
+        path = tmp_path / f"case{case}-{name}.json"
+        path.write_text(json.dumps(mutate(originals[name], rng)))
+        try:
+            scene = load_scene(path)
+            for stage in stage_names():
+                st = get_stage(stage)
+                try:
+                    st.check_scene(scene)
+                    st.check_cost(scene, (16, 12))
+                    st.options(scene)
+                except KitError as err:
+                    one_line(err, path.name)
+        except KitError as err:
+            one_line(err, path.name)
+            refused += 1
+            continue
+        stage = next((s for s in scene.options if s in RENDERED_STAGES), None)
+        if stage is None:
+            continue
+        try:
+            render_scene(scene=str(path), output=tmp_path / "out.png", stage=stage, size="16x12")
+            drawn += 1
+        except KitError as err:
+            one_line(err, path.name)
+    assert refused > CASES // 4 and drawn > 10, (refused, drawn)   # the mutations reach both outcomes
+
+
+BAD = ["", "-5x10", "0x0", "99999x99999", "1e30", "x", "/nonexistent/scene.json", "/etc", "/dev/null", "nosuch",
+       "sphere", "whitted", "8x6", "out/", "a.jpg", "/etc/passwd/x.png", "S1,S99", "-1"]
+OPTIONS = {"render": ["--impl", "--size", "--stage", "--shading", "-o"], "grade": ["--submission", "--tasks", "--jobs"],
+           "scenes": [], "release": ["-o"]}
+
+
+def test_bad_command_lines_end_in_one_line_and_exit_2(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    rng = random.Random(7)
+    for case in range(120):
+        command = rng.choice(sorted(OPTIONS))
+        argv = [command] + ([rng.choice(["sphere", "whitted", "nosuch", "/dev/null", ""])] if command != "scenes" else [])
+        for option in rng.sample(OPTIONS[command], k=min(len(OPTIONS[command]), rng.randint(0, 3))):
+            argv += [option, rng.choice(BAD)]
+        if command == "render" and "--size" not in argv:
+            argv += ["--size", "8x6"]
+        if command == "grade" and "--submission" not in argv:
+            argv += ["--submission", "/nonexistent"]
+        if command == "release" and "-o" not in argv:
+            argv += ["-o", "/etc"]
+        try:
+            code = main(argv)
+        except SystemExit as exit_:
+            code = exit_.code
+        err = capsys.readouterr().err
+        assert code in (0, 2), (case, argv, code, err[-500:])
+        assert "Traceback" not in err and "internal error" not in err, (case, argv, err[-500:])
+        if code == 2:   # one line, after argparse's usage where the command line itself is wrong
+            last = err.strip().splitlines()[-1] if err.strip() else ""
+            assert last.startswith("cs451") and "error:" in last, (case, argv, err)
+            assert err.count("error:") == 1, (case, argv, err)
+
+
+def test_an_internal_error_is_one_line_with_a_way_to_the_traceback(capsys, monkeypatch):
+    import cs451.render
+    monkeypatch.setattr(cs451.render, "load_scene", lambda *_: 1 / 0)
+    assert main(["render", "sphere", "-o", "x.png"]) == 3
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "ZeroDivisionError" in err and "CS451_TRACEBACK=1" in err
