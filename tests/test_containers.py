@@ -1,0 +1,36 @@
+"""The container recipes run the README's own two commands (Docker is not runnable on every machine that
+runs these tests, so what is checked here is that the recipes and the README cannot drift apart; CI runs
+the same two commands from a fresh clone)."""
+from __future__ import annotations
+
+import json
+import re
+import shlex
+
+from cs451 import KIT_ROOT
+
+
+def readme_commands() -> list[str]:
+    block = re.search(r"## Quick start.*?```sh\n(.*?)```", (KIT_ROOT / "README.md").read_text(), re.S).group(1)
+    return [line.split("#")[0].strip() for line in block.strip().splitlines()]
+
+
+def test_the_dockerfile_sets_up_and_tests_as_the_readme_says():
+    text = (KIT_ROOT / "Dockerfile").read_text()
+    setup, test = readme_commands()
+    assert f"RUN {setup}" in text
+    cmd = json.loads(re.search(r"^CMD (\[.*\])$", text, re.M).group(1))
+    assert cmd == shlex.split(test)
+    setup_packages = set(re.search(r"for pkg in ([\w .-]+); do", (KIT_ROOT / "setup.sh").read_text()).group(1).split())
+    assert setup_packages <= set(text.split()), "the image must already hold what setup.sh would install"
+
+
+def test_the_devcontainer_builds_the_dockerfile_and_runs_the_setup():
+    config = json.loads((KIT_ROOT / ".devcontainer" / "devcontainer.json").read_text())
+    assert config["build"]["dockerfile"] == "../Dockerfile"
+    assert config["postCreateCommand"] == readme_commands()[0]
+
+
+def test_the_dockerignore_keeps_the_checkout_s_litter_out():
+    ignored = (KIT_ROOT / ".dockerignore").read_text().split()
+    assert {".venv/", ".git/", ".cs451-cache/"} <= set(ignored)
