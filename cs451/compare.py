@@ -89,3 +89,13 @@ def difference_image(reference: np.ndarray, candidate: np.ndarray, gain: float =
         return np.zeros(reference.shape, dtype=np.uint8)
     d = np.abs(np.nan_to_num(candidate, nan=1.0, posinf=1.0, neginf=1.0) - reference) * gain
     return np.round(np.clip(d, 0, 1) * 255).astype(np.uint8)
+
+
+def flip_error(reference: np.ndarray, test: np.ndarray) -> tuple[float, np.ndarray]:
+    """NVIDIA's FLIP (flip-evaluator) between two images as a screen shows them (uint8, read as sRGB):
+    the mean perceptual error in [0, 1] and its error map, coloured (magma: black where alike), as uint8."""
+    import flip_evaluator  # local: only reports need it
+    ref = np.asarray(reference, dtype=np.float32) / 255.0
+    got = np.asarray(test, dtype=np.float32) / 255.0
+    error_map, mean, _ = flip_evaluator.evaluate(ref, got, "LDR")
+    return float(mean), np.round(np.clip(error_map, 0.0, 1.0) * 255.0).astype(np.uint8)

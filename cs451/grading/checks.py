@@ -73,6 +73,18 @@ def _shown(image: np.ndarray, params: dict) -> np.ndarray:
     return to_uint8(image, float(settings.get("exposure", 1.0)), bool(settings.get("srgb", False)))
 
 
+def target_images(expected: Outputs | None, params: dict, key: str = "image") -> dict[str, np.ndarray]:
+    """The reference's render of an image test, for a report whose submission drew nothing (it crashed, timed
+    out or is not written yet): the student still sees the target."""
+    image = (expected or {}).get(key)
+    if image is None:
+        return {}
+    image = np.asarray(image)
+    if image.ndim != 3 or image.shape[2] not in (3, 4) or image.dtype.kind not in "fu":
+        return {}
+    return {"reference": image if image.dtype == np.uint8 else _shown(image, params)}
+
+
 def image_check(out: Outputs, expected: Outputs, params: dict, threshold: float, max_bad_fraction: float, shift: int,
                 key: str = "image") -> Verdict:
     """The submission's image matches the reference render (compared in linear values); the report gets all four

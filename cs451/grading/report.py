@@ -1,32 +1,40 @@
-"""A self-contained HTML report: reference, submission, difference and error map side by side per image test.
+"""A self-contained HTML report: reference, submission, difference, error map and FLIP side by side per image test.
 
-Like Stanford draw-svg's reference-and-diff viewer, but a single file a student
-can open offline or an instructor can attach to a grade.
+Like Stanford draw-svg's reference-and-diff viewer, but a single file a student can open offline or an
+instructor can attach to a grade. The page is a Jinja2 template (``templates/report.html.j2``, escaped
+by default); failures come first and passing tests are folded; small images are scaled up by whole pixels
+and enlarge on a click; a failing image test whose submission drew nothing still shows the target.
 """
 from __future__ import annotations
 
 import base64
-import html
 import io
+import math
 from pathlib import Path
 
 import numpy as np
+from jinja2 import Environment, PackageLoader, select_autoescape
 from PIL import Image as PILImage
 
+from ..compare import flip_error
 from .runner import GradeResult
 
-STYLE = """
-body{font-family:system-ui,sans-serif;margin:2em;max-width:1200px;color:#222}
-table{border-collapse:collapse;margin:1em 0}td,th{padding:.3em .7em;border-bottom:1px solid #ddd;text-align:left}
-.ok{color:#17803d}.fail{color:#b42318}.part{color:#b54708}.muted{color:#666}
-.imgs{display:flex;gap:1em;flex-wrap:wrap}.imgs figure{margin:0}.imgs img{image-rendering:pixelated;max-width:270px;border:1px solid #ccc}
-figcaption{font-size:.85em;color:#555}section{margin:1.5em 0;padding-top:.5em;border-top:1px solid #eee}
-code{background:#f4f4f4;padding:0 .2em}
-"""
 CAPTIONS = {"reference": "reference (as <code>cs451 render</code> writes it)",
             "submission": "yours (as <code>cs451 render</code> writes it)",
             "difference": "|difference| × 4, linear: black where they agree",
-            "error": "error map after the 3×3 allowance: black where equal, yellow up to the threshold, red over it"}
+            "error": "error map after the 3×3 allowance: black where equal, yellow up to the threshold, red over it",
+            "flip": "FLIP, the perceptual error (NVIDIA's ꟻLIP; magma: black where a viewer sees no difference): "
+                    "mean {mean:.3f}"}
+ORDER = ("reference", "submission", "difference", "error", "flip")
+#: images narrower than this are shown scaled up by a whole factor (W11's 96 × 72 renders)
+MIN_SHOWN_WIDTH = 256
+#: larger ones are shown at most this wide, five in a row; a click shows them up to ZOOMED_WIDTH
+MAX_SHOWN_WIDTH = 300
+ZOOMED_WIDTH = 1100
+
+_env = Environment(loader=PackageLoader("cs451.grading", "templates"), autoescape=select_autoescape(["j2", "html"]),
+                   trim_blocks=True, lstrip_blocks=True)
+_env.filters["num"] = lambda x: f"{x:g}"
 
 
 def _png_data_uri(image: np.ndarray) -> str:
@@ -56,56 +64,42 @@ def hidden_note(result: GradeResult, show_hidden: bool = False) -> str:
             "they check the same tasks on other scenes, sizes and parameters.")
 
 
+def figures(images: dict[str, np.ndarray]) -> list[dict]:
+    """The pictures of one test in the report's order, with the FLIP map where both renders are there."""
+    images = dict(images)
+    captions = dict(CAPTIONS)
+    ref, got = images.get("reference"), images.get("submission")
+    if ref is not None and got is not None and ref.shape == got.shape and ref.ndim == 3:
+        mean, images["flip"] = flip_error(ref, got)
+        captions["flip"] = CAPTIONS["flip"].format(mean=mean)
+    out = []
+    for key in ORDER:
+        if key in images:
+            image = np.asarray(images[key])
+            native = max(image.shape[1], 1)
+            shown = native * math.ceil(MIN_SHOWN_WIDTH / native) if native < MIN_SHOWN_WIDTH else min(native, MAX_SHOWN_WIDTH)
+            zoom = min(max(native, 3 * shown), ZOOMED_WIDTH)
+            out.append({"key": key, "uri": _png_data_uri(image), "width": shown, "zoom": zoom, "caption": captions[key]})
+    return out
+
+
+def _row(r) -> dict:
+    status, word = _status(r)
+    return {"number": r.test.number, "name": r.test.name, "score": r.score, "points": r.test.points,
+            "status": status, "word": word, "hidden": r.test.hidden, "tolerance": r.test.tolerance,
+            "message": r.verdict.message, "output": r.output.strip() and r.output}
+
+
 def render_report(result: GradeResult, show_hidden: bool = True) -> str:
     """The report as HTML; with ``show_hidden=False`` hidden tests are counted, not shown (the student's view)."""
-    esc = html.escape
     shown = [r for r in result.results if show_hidden or not r.test.hidden]
-    score = sum(r.score for r in shown)
-    total = sum(r.test.points for r in shown)
-    parts = [f"<!doctype html><meta charset=utf-8><title>cs451 {esc(result.stage)}: {score:g}/{total:g}</title>",
-             f"<style>{STYLE}</style>",
-             f"<h1>Stage {esc(result.stage)}: {score:g} / {total:g} points</h1>",
-             f"<p class=muted>submission <code>{esc(result.submission)}</code>, graded in {result.seconds:.1f} s</p>"]
-    note = hidden_note(result, show_hidden)
-    if note:
-        parts.append(f"<p><b>{esc(note)}</b></p>")
-    if result.problems:
-        parts.append("<h2>Problems found before testing</h2><ul>" +
-                     "".join(f"<li>{esc(p)}</li>" for p in result.problems) + "</ul>")
-    parts.append("<table><tr><th>test</th><th>points</th><th></th><th>name</th><th>tolerance</th></tr>")
-    for r in shown:
-        cls, word = _status(r)
-        tag = " <span class=muted>(hidden)</span>" if r.test.hidden else ""
-        parts.append(f"<tr><td><a href='#t{esc(r.test.number)}'>{esc(r.test.number)}</a></td>"
-                     f"<td>{r.score:g} / {r.test.points:g}</td><td class={cls}>{word}</td>"
-                     f"<td>{esc(r.test.name)}{tag}</td><td class=muted>{esc(r.test.tolerance)}</td></tr>")
-    parts.append("</table>")
-    failed = [r for r in shown if not r.verdict.passed]
-    passed = [r for r in shown if r.verdict.passed]
-    parts += [_section(r) for r in failed]           # failures first: what a student came to see
-    if passed:
-        parts.append(f"<details><summary>{len(passed)} passing test{'s' if len(passed) != 1 else ''}</summary>")
-        parts += [_section(r) for r in passed]
-        parts.append("</details>")
-    return "\n".join(parts)
-
-
-def _section(r) -> str:
-    esc = html.escape
-    cls, word = _status(r)
-    parts = [f"<section id='t{esc(r.test.number)}'><h3>{esc(r.test.number)} {esc(r.test.name)} "
-             f"<span class={cls}>{word}</span></h3><p>{esc(r.verdict.message)}</p>"]
-    if r.verdict.images:
-        parts.append("<div class=imgs>")
-        for key in ("reference", "submission", "difference", "error"):
-            if key in r.verdict.images:
-                parts.append(f"<figure><img src='{_png_data_uri(r.verdict.images[key])}' alt='{key}'>"
-                             f"<figcaption>{CAPTIONS[key]}</figcaption></figure>")
-        parts.append("</div>")
-    if r.output.strip():
-        parts.append(f"<details><summary>your code printed</summary><pre>{esc(r.output)}</pre></details>")
-    parts.append("</section>")
-    return "".join(parts)
+    failed = [dict(_row(r), figures=figures(r.verdict.images)) for r in shown if not r.verdict.passed]
+    passed = [dict(_row(r), figures=figures(r.verdict.images)) for r in shown if r.verdict.passed]
+    return _env.get_template("report.html.j2").render(
+        stage=result.stage, submission=str(result.submission), seconds=result.seconds, isolation=result.isolation,
+        score=sum(r.score for r in shown), total=sum(r.test.points for r in shown),
+        hidden_note=hidden_note(result, show_hidden), problems=result.problems, rows=[_row(r) for r in shown],
+        failed=failed, passed=passed)
 
 
 def write_report(folder: str | Path, result: GradeResult, show_hidden: bool = True) -> Path:

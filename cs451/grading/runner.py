@@ -29,6 +29,7 @@ from ..progress import Progress
 from ..stages import get_stage
 from . import sandbox
 from .expected import ReferenceAnswers, TruthValues, expected_for, is_student_copy
+from .checks import target_images
 from .guard import CheckFailed, GuardError, run_guarded
 from .loader import hidden_summary, load_tests
 from .spec import CHECK_MODULES, Outputs, Test, Verdict
@@ -279,7 +280,8 @@ def _grade_tests(out: GradeResult, tests: list[Test], probes: Any, reference: Re
             if isinstance(done, TestResult):
                 results[i] = done
             elif not done.ok:
-                results[i] = TestResult(tests[i], 0.0, Verdict(0.0, done.error), done.output, done.seconds)
+                target = target_images(prepared[i][1], tests[i].params)
+                results[i] = TestResult(tests[i], 0.0, Verdict(0.0, done.error, target), done.output, done.seconds)
             else:
                 verdict = _verdict(tests[i], done, prepared[i][1])
                 results[i] = TestResult(tests[i], _score(tests[i], verdict), verdict, done.output, done.seconds)
