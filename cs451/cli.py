@@ -72,6 +72,26 @@ def _cmd_starter(a: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_figures(a: argparse.Namespace) -> int:
+    from .packaging.figures import check_figures, write_figures
+    from .stages import stage_names
+    stages = [a.stage] if a.stage else stage_names()
+    if a.check:
+        problems = [p for s in stages for p in check_figures(s)]
+        for p in problems:
+            print(p)
+        if problems:
+            print("the handouts' figures have drifted from the reference: run `cs451 figures` to regenerate them",
+                  file=sys.stderr)
+            return 1
+        print("the handouts' figures are in step with the reference")
+        return 0
+    for s in stages:
+        files = write_figures(s)
+        print(f"{s}: wrote {len(files) - 1} figures and the handout's figures block")
+    return 0
+
+
 def _cmd_demo(a: argparse.Namespace) -> int:
     from .demos import run_demo
     window = True if a.window else (False if a.no_window else None)
@@ -221,6 +241,13 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("starter", help="regenerate starter/ from reference/", description="Regenerate starter/ from the solution regions of reference/.")
     s.add_argument("--check", action="store_true", help="only check: exit 1 if starter/ has drifted")
     s.set_defaults(func=_cmd_starter)
+
+    fg = sub.add_parser("figures", help="regenerate the handouts' target images from the reference",
+                        description="Render the reference's target image of every public image test into "
+                                    "assignments/<handout>/figures/ and the handout's figures block.")
+    fg.add_argument("stage", nargs="?", choices=stages, help="one stage (default: all)")
+    fg.add_argument("--check", action="store_true", help="only check: exit 1 if the figures have drifted")
+    fg.set_defaults(func=_cmd_figures)
 
     rl = sub.add_parser("release", help="build the students' starter repository (GitHub Classroom template)",
                         description="Write a repository for students: the starter, the handout, the public tests "

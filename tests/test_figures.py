@@ -1,0 +1,39 @@
+"""The handouts' target images are the reference's renders of the public image tests, and stay so."""
+from __future__ import annotations
+
+import pytest
+
+from cs451 import KIT_ROOT
+from cs451.packaging.figures import check_figures, stage_figures
+from cs451.packaging.release import build_release
+from cs451.stages import get_stage, stage_names
+
+
+@pytest.mark.parametrize("stage", stage_names())
+def test_the_handout_figures_are_in_step_with_the_reference(stage):
+    assert check_figures(stage) == [], "run `cs451 figures` to regenerate them"
+
+
+def test_every_public_image_test_has_a_figure_and_a_release_ships_them(tmp_path):
+    figures = stage_figures("sphere", show_progress=False)
+    assert [f.test.task for f in figures] == ["S4", "S4", "S4", "S5", "S5"]
+    out = build_release("sphere", tmp_path / "repo")
+    handout = out / "assignments" / get_stage("sphere").handout
+    assert sorted(p.name for p in (handout / "figures").glob("*.png")) == sorted(f.name for f in figures)
+    assert "![S4.1](figures/S4.1.png)" in (handout / "README.md").read_text()
+
+
+def test_a_changed_figure_is_drift(tmp_path, monkeypatch):
+    import numpy as np
+    from cs451.imageio import load_png, save_png
+    import cs451.packaging.figures as F
+    kit = tmp_path / "kit"
+    handout = KIT_ROOT / "assignments" / get_stage("sphere").handout
+    (kit / "assignments").mkdir(parents=True)
+    import shutil
+    shutil.copytree(handout, kit / "assignments" / handout.name)
+    path = kit / "assignments" / handout.name / "figures" / "S4.1.png"
+    image = load_png(path)
+    save_png(path, np.clip(image * 0.7, 0, 1))
+    monkeypatch.setattr(F, "KIT_ROOT", kit)
+    assert check_figures("sphere") == [f"assignments/{handout.name}/figures/S4.1.png: differs from the reference's render"]
