@@ -24,6 +24,15 @@ def _cmd_render(a: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_compare(a: argparse.Namespace) -> int:
+    from .side_by_side import compare_files
+    out = compare_files(a.mine, a.target, a.output)
+    verdict = "matches" if out.passed else "differs"
+    print(f"{a.mine} {verdict} {a.target} as the image tests judge it: {out.message}; FLIP {out.flip_mean:.3f}")
+    print(f"wrote {out.output} (target, mine, the grader's error map, FLIP)")
+    return 0 if out.passed else 1
+
+
 def _cmd_grade(a: argparse.Namespace) -> int:
     if a.roster:
         from .grading.roster import grade_roster
@@ -185,6 +194,13 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--shading", choices=["gouraud", "phong"], help="stage 1 only: override the scene's shading")
     r.set_defaults(func=_cmd_render)
 
+    c = sub.add_parser("compare", help="a render beside its target, judged as the image tests judge",
+                       description="Compare your render with a target image (a handout figure, or a reference "
+                                   "render) as the image tests do, and write them side by side with the error maps.")
+    c.add_argument("mine", help="your PNG (cs451 render … -o mine.png)")
+    c.add_argument("target", help="the target PNG, e.g. assignments/…/figures/S4.1.png")
+    c.add_argument("-o", "--output", default="compare.png", help="side-by-side PNG to write (default: compare.png)")
+    c.set_defaults(func=_cmd_compare)
     g = sub.add_parser("grade", help="grade a submission and write a report", description="Run a stage's autograder tests on a submission.")
     g.add_argument("stage", choices=stages)
     g.add_argument("--submission", help=f"{'' if mine else 'reference, starter, or '}a folder holding the stage's "

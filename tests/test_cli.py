@@ -7,6 +7,7 @@ import sys
 import numpy as np
 import pytest
 
+from cs451 import KIT_ROOT
 from cs451.cli import build_parser, main
 from cs451.imageio import load_png
 
@@ -15,7 +16,7 @@ def cs451(*args, env=None):
     return subprocess.run([sys.executable, "-m", "cs451.cli", *args], capture_output=True, text=True, env=env)
 
 
-@pytest.mark.parametrize("command", ["render", "grade", "starter", "demo", "scenes", "bench"])
+@pytest.mark.parametrize("command", ["render", "grade", "compare", "figures", "starter", "demo", "scenes", "bench"])
 def test01_every_subcommand_has_help(command):
     proc = cs451(command, "--help")
     assert proc.returncode == 0 and "usage: cs451 " + command in proc.stdout
@@ -66,3 +67,16 @@ def test06_demo_without_a_display_writes_images(tmp_path):
 def test07_parser_lists_the_stages():
     assert "sphere" in build_parser()._subparsers._group_actions[0].choices["render"].format_help()
     assert any(line.startswith("sphere") for line in cs451("scenes").stdout.splitlines())
+
+
+def test_compare_puts_a_render_beside_its_target_and_judges_it_as_the_tests_do(tmp_path):
+    from cs451.imageio import load_png
+    target = KIT_ROOT / "assignments" / "01-sphere" / "figures" / "S4.1.png"
+    done = cs451("render", "sphere", "-o", str(tmp_path / "mine.png"))
+    assert done.returncode == 0, done.stderr
+    done = cs451("compare", str(tmp_path / "mine.png"), str(target), "-o", str(tmp_path / "side.png"))
+    assert done.returncode == 0 and "matches" in done.stdout and "FLIP 0.000" in done.stdout, done.stdout
+    side = load_png(tmp_path / "side.png")
+    assert side.shape == (500 + 16, 4 * 500 + 3 * 4, 3)
+    done = cs451("compare", str(tmp_path / "mine.png"), str(target.with_name("S4.2.png")))
+    assert done.returncode == 2 and done.stderr.count("\n") == 1 and "--size 320x240" in done.stderr

@@ -27,7 +27,8 @@ from ..stages import get_stage
 
 BLOCK = re.compile(r"(<!-- figures -->\n)(.*?)(<!-- /figures -->)", re.S)
 INTRO = ("What the reference draws for each public image test (rendered from the reference solution by the kit; "
-         "your render should match it within the test's tolerance):\n\n")
+         "your render should match it within the test's tolerance). To see yours beside one, judged as the test "
+         "judges it: `cs451 render SCENE --size WxH -o mine.png`, then `cs451 compare mine.png {example}`.\n\n")
 
 
 @dataclass(frozen=True)
@@ -62,9 +63,12 @@ def stage_figures(stage: str, show_progress: bool = True) -> list[Figure]:
     return out
 
 
-def block_text(figures: list[Figure]) -> str:
+def block_text(figures: list[Figure], handout: str) -> str:
+    if not figures:
+        return ""
     rows = "".join(f"| ![{f.test.number}](figures/{f.name}) | **{f.test.number}** {f.test.name} |\n" for f in figures)
-    return INTRO + "| target | test |\n|---|---|\n" + rows + "\n" if figures else ""
+    example = f"assignments/{handout}/figures/{figures[0].name}"
+    return INTRO.format(example=example) + "| target | test |\n|---|---|\n" + rows + "\n"
 
 
 def _handout(stage: str) -> Path:
@@ -84,7 +88,8 @@ def write_figures(stage: str) -> list[Path]:
         if old.name not in {f.name for f in figures}:
             old.unlink()
     written = [save_png(folder / f.name, f.image) for f in figures]
-    handout.write_text(BLOCK.sub(lambda m: m.group(1) + block_text(figures) + m.group(3), text))
+    block = block_text(figures, get_stage(stage).handout)
+    handout.write_text(BLOCK.sub(lambda m: m.group(1) + block + m.group(3), text))
     return written + [handout]
 
 
@@ -94,7 +99,7 @@ def check_figures(stage: str, tolerance: ImageTolerance = ImageTolerance()) -> l
     figures = stage_figures(stage, show_progress=False)
     problems = []
     match = BLOCK.search(handout.read_text())
-    if match is None or match.group(2) != block_text(figures):
+    if match is None or match.group(2) != block_text(figures, get_stage(stage).handout):
         problems.append(f"{handout.relative_to(KIT_ROOT)}: the figures block is not what `cs451 figures` writes")
     folder = handout.parent / "figures"
     for f in figures:
