@@ -256,7 +256,8 @@ def _plot(path: Path, forms: list[dict], box: dict, resolutions: list[int]) -> N
     b.loglog([p["seconds_matrix"] for p in h], [p["error"] for p in h], "o-", label="hemicube")
     for p in h:
         b.annotate(str(p["resolution"]), (p["seconds_matrix"], p["error"]), fontsize=7)
-    b.loglog([p["seconds_matrix"] for p in r], [p["error"] for p in r], "s-", label="ray casting (Embree)")
+    if r:   # Embree is an optional peer: no line, and no legend entry, without it
+        b.loglog([p["seconds_matrix"] for p in r], [p["error"] for p in r], "s-", label="ray casting (Embree)")
     for p in r:
         b.annotate(str(p["samples"]), (p["seconds_matrix"], p["error"]), fontsize=7)
     b.set_xlabel("seconds for the full matrix")

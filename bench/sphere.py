@@ -65,5 +65,26 @@ def main(output: Path, quick: bool = False) -> dict:
     output.mkdir(parents=True, exist_ok=True)
     result = {"renderer": renderer_name(ctx), "size": [w, h], "rows": rows}
     (output / "sphere.json").write_text(json.dumps(result, indent=2))
-    print(f"wrote {output / 'sphere.json'}")
+    _plot(output / "sphere.png", rows, result["renderer"])
+    print(f"wrote {output / 'sphere.json'} and {output / 'sphere.png'}")
     return result
+
+
+def _plot(path: Path, rows: list[dict], renderer: str) -> None:
+    """Frame time against mean error, one line per shading, each point labelled with its tessellation."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    for shading, marker in (("gouraud", "o-"), ("phong", "s-")):
+        mine = [r for r in rows if r["shading"] == shading]
+        ax.loglog([r["frame_ms"] for r in mine], [max(r["mean_error"], 1e-6) for r in mine], marker, label=shading)
+        for r in mine:
+            ax.annotate(str(r["tessellation"]), (r["frame_ms"], max(r["mean_error"], 1e-6)), fontsize=7)
+    ax.set_xlabel("frame time, ms")
+    ax.set_ylabel("mean error against Phong at 512 × 512")
+    ax.set_title(f"stage 1: tessellation (labels) against error\n{renderer}", fontsize=9)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

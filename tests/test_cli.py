@@ -80,3 +80,9 @@ def test_compare_puts_a_render_beside_its_target_and_judges_it_as_the_tests_do(t
     assert side.shape == (500 + 16, 4 * 500 + 3 * 4, 3)
     done = cs451("compare", str(tmp_path / "mine.png"), str(target.with_name("S4.2.png")))
     assert done.returncode == 2 and done.stderr.count("\n") == 1 and "--size 320x240" in done.stderr
+
+
+def test_bench_sphere_writes_its_table_and_the_plot_the_readme_promises(tmp_path):
+    done = cs451("bench", "sphere", "--quick", "-o", str(tmp_path))
+    assert done.returncode == 0, done.stderr[-1500:]
+    assert (tmp_path / "sphere.json").is_file() and load_png(tmp_path / "sphere.png").shape[2] == 3
