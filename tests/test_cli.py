@@ -86,3 +86,11 @@ def test_bench_sphere_writes_its_table_and_the_plot_the_readme_promises(tmp_path
     done = cs451("bench", "sphere", "--quick", "-o", str(tmp_path))
     assert done.returncode == 0, done.stderr[-1500:]
     assert (tmp_path / "sphere.json").is_file() and load_png(tmp_path / "sphere.png").shape[2] == 3
+
+
+def test_demo_captions_never_draw_a_missing_glyph_box():
+    from cs451.demos.frames import captioned
+    frame = np.zeros((60, 400, 3), np.uint8)
+    fancy = captioned(frame, "16 shots — left: B, right: B + ρ·ambient, β ≤ 0.1")
+    plain = captioned(frame, "16 shots - left: B, right: B + rho*ambient, beta <= 0.1")
+    assert np.array_equal(fancy, plain)

@@ -6,6 +6,11 @@ from pathlib import Path
 import numpy as np
 
 
+#: Pillow's built-in font has Latin letters only: symbols a caption uses, in letters it can draw
+PLAIN = str.maketrans({"—": "-", "–": "-", "·": "*", "×": "x", "ρ": "rho", "β": "beta", "Δ": "d", "≤": "<=",
+                       "≥": ">=", "→": "->", "…": "..."})
+
+
 def captioned(frame: np.ndarray, caption: str) -> np.ndarray:
     """The frame (uint8 RGB) with a strip of text under it: what the frame shows (``shot 16``, ``W: shadows off``)."""
     from PIL import Image, ImageDraw, ImageFont
@@ -17,7 +22,8 @@ def captioned(frame: np.ndarray, caption: str) -> np.ndarray:
         font = ImageFont.load_default(size=max(10, int(height * 0.7)))
     except TypeError:  # Pillow < 10.1: one size only
         font = ImageFont.load_default()
-    draw.text((6, height // 2), caption, fill=(235, 235, 235), font=font, anchor="lm")
+    text = caption.translate(PLAIN).encode("latin-1", "replace").decode("latin-1")   # never a box for a glyph
+    draw.text((6, height // 2), text, fill=(235, 235, 235), font=font, anchor="lm")
     return np.vstack([frame, np.asarray(strip)])
 
 
