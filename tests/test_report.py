@@ -7,7 +7,7 @@ import numpy as np
 
 from cs451.grading.checks import target_images
 from cs451.grading.report import render_report
-from cs451.grading.runner import GradeResult, TestResult
+from cs451.grading.runner import GradeResult, TestResult as Result
 from cs451.grading.spec import Test as Spec, Verdict, check
 from cs451.grading.checks import close_to
 
@@ -17,7 +17,7 @@ def _test(name: str, number: str, points: float = 2.0) -> Spec:
 
 
 def _result(*rows: tuple[Spec, Verdict]) -> GradeResult:
-    return GradeResult("whitted", "sub", [TestResult(t, t.points * v.fraction, v) for t, v in rows], seconds=1.0)
+    return GradeResult("whitted", "sub", [Result(t, t.points * v.fraction, v) for t, v in rows], seconds=1.0)
 
 
 def _images(shift: float) -> dict[str, np.ndarray]:

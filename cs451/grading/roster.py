@@ -44,7 +44,9 @@ def grade_roster(*, stage: str, roster: str | Path, output: str | Path, include_
 
     protected = (roster.resolve(), output.resolve())
     workers = 1 if not _namespaces_available() else (parallel or max(1, (os.cpu_count() or 1)))
-    context = multiprocessing.get_context("fork" if hasattr(os, "fork") else "spawn")
+    # a clean process to fork from: a grader that has run threaded native code (ꟻLIP in a report, llvmpipe)
+    # cannot fork safely; the forkserver has run none of it
+    context = multiprocessing.get_context("forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn")
     with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
         futures = {pool.submit(_grade_one, stage, sub, output / sub.name, include_hidden, tasks, protected, only): sub
                    for sub in subs}
