@@ -28,7 +28,8 @@ from ..stages import get_stage
 BLOCK = re.compile(r"(<!-- figures -->\n)(.*?)(<!-- /figures -->)", re.S)
 INTRO = ("What the reference draws for each public image test (rendered from the reference solution by the kit; "
          "your render should match it within the test's tolerance). To see yours beside one, judged as the test "
-         "judges it: `cs451 render SCENE --size WxH -o mine.png`, then `cs451 compare mine.png {example}`.\n\n")
+         "judges it, render the same scene at the figure's size and give both PNGs to the compare command: "
+         "cs451 compare mine.png {example}.\n\n")
 
 
 @dataclass(frozen=True)
