@@ -295,7 +295,7 @@ def _joined_values(argv: list[str]) -> list[str]:
     return out
 
 
-VALUE_OPTIONS = {"--size", "--frames", "-j", "--jobs"}
+VALUE_OPTIONS = {"--size", "--frames", "--jobs"}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import ast
 import json
-import shutil
 from pathlib import Path
 
 import pytest
@@ -59,11 +58,6 @@ def relies_on(tests: list) -> dict[str, set[str]]:
     return {t.number: closure(set(t.depends_on)) for t in tests}
 
 
-def reference_copy(stage: str, root: Path) -> Path:
-    shutil.copytree(KIT_ROOT / "reference" / stage, root / stage, ignore=shutil.ignore_patterns("__pycache__"))
-    return root
-
-
 @pytest.mark.parametrize("stage", STAGES)
 def test_the_reference_scores_full_marks(stage, reference_grade_of):
     result = reference_grade_of(stage)
@@ -81,8 +75,8 @@ def test_the_starter_scores_zero_with_a_hint_per_test(stage):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("stage, task", [(s, t.id) for s in STAGES for t in get_stage(s).tasks])
-def test_a_task_stubbed_alone_loses_only_its_points(stage, task, tmp_path, reference_grade_of):
-    sub = reference_copy(stage, tmp_path / "sub")
+def test_a_task_stubbed_alone_loses_only_its_points(stage, task, make_submission, reference_grade_of):
+    sub = make_submission(stage)
     stub_out(sub / stage, get_stage(stage).task(task).function)
     result = grade(stage, sub, show_progress=False)
     full = {r.test.number: r.score for r in reference_grade_of(stage).results}
