@@ -198,7 +198,7 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Compare your render with a target image (a handout figure, or a reference "
                                    "render) as the image tests do, and write them side by side with the error maps.")
     c.add_argument("mine", help="your PNG (cs451 render … -o mine.png)")
-    c.add_argument("target", help="the target PNG, e.g. assignments/…/figures/S4.1.png")
+    c.add_argument("target", help="the target PNG, e.g. assignments/…/figures/S5.1.png")
     c.add_argument("-o", "--output", default="compare.png", help="side-by-side PNG to write (default: compare.png)")
     c.set_defaults(func=_cmd_compare)
     g = sub.add_parser("grade", help="grade a submission and write a report", description="Run a stage's autograder tests on a submission.")

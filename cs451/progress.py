@@ -25,7 +25,7 @@ def verbose() -> bool:
 
 
 class Progress:
-    """``label:  40%|████      | 4/10 [00:02<00:03] S3.1`` once the work has run past ``delay`` seconds."""
+    """``label:  40%|████      | 4/10 [00:02<00:03] S4.1`` once the work has run past ``delay`` seconds."""
 
     def __init__(self, label: str, total: int, delay: float = 1.0, stream=None, unit: str = "it"):
         stream = stream or sys.stderr

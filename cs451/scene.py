@@ -188,6 +188,74 @@ class Mesh(Object):
     translate: Vec3 = field("Translation applied after scaling.", (0.0, 0.0, 0.0))
 
 
+class Transform(Tagged, family=True):
+    """One call of OpenGL 1.x's modelview matrix (glTranslate, glRotate, glScale); the ``type`` key picks it."""
+
+
+@Transform.register("translate")
+@dataclass(frozen=True)
+class Translate(Transform):
+    offset: Vec3 = field("glTranslate(x, y, z): the offset.")
+
+    @property
+    def call(self) -> tuple:
+        return ("translate", *map(float, self.offset))
+
+
+@Transform.register("rotate")
+@dataclass(frozen=True)
+class Rotate(Transform):
+    angle: float = field("glRotate's angle in degrees, counter-clockwise looking from the axis' tip to the origin.")
+    axis: Vec3 = field("glRotate's axis (any length; OpenGL normalises it).", check=schema.nonzero_vector)
+
+    @property
+    def call(self) -> tuple:
+        return ("rotate", float(self.angle), *map(float, self.axis))
+
+
+def _nonzero_factors(v: Any) -> str | None:
+    return "no factor may be 0 (the normals could not be transformed)" if any(c == 0 for c in v) else None
+
+
+@Transform.register("scale")
+@dataclass(frozen=True)
+class Scale(Transform):
+    factors: Vec3 = field("glScale(x, y, z): the factors along each axis (none 0).", check=_nonzero_factors)
+
+    @property
+    def call(self) -> tuple:
+        return ("scale", *map(float, self.factors))
+
+
+#: OpenGL guarantees a modelview stack of at least 32 matrices (GL_MAX_MODELVIEW_STACK_DEPTH): the view, then
+#: one push per group
+MAX_GROUP_DEPTH = 31
+
+
+@Object.register("group")
+@dataclass(frozen=True)
+class Group(Object):
+    """Objects placed together: the transforms apply to every child, as calls between glPushMatrix and glPopMatrix."""
+    objects: list[Object] = field("The objects of the group (spheres, or groups again).")
+    transform: list[Transform] = field(
+        "Calls in the order a program makes them (translate, rotate, scale); the last is the first applied to the "
+        "objects.", [])
+
+
+def walk_objects(objects: list, ctx: Context | None = None, depth: int = 0):
+    """Every object that is not a group, in drawing order, with its JSON context (``objects[2].objects[0]``)."""
+    ctx = ctx or Context("")
+    for k, obj in enumerate(objects):
+        sub = ctx.child("objects").child(k)
+        if isinstance(obj, Group):
+            if depth >= MAX_GROUP_DEPTH:
+                raise sub.error(f"groups nest at most {MAX_GROUP_DEPTH} deep (OpenGL's modelview stack holds 32 "
+                                f"matrices)")
+            yield from walk_objects(obj.objects, sub, depth + 1)
+        else:
+            yield obj, sub
+
+
 @dataclass(frozen=True)
 class Scene:
     camera: Camera = field("The viewpoint.")
@@ -203,12 +271,11 @@ class Scene:
 
     def validate(self, ctx: Context) -> None:
         known = set(self.materials) | {"default"}
-        for i, obj in enumerate(self.objects):
+        for obj, where in walk_objects(self.objects, ctx):
             for key in ("material", "checker_material"):
                 name = getattr(obj, key, None)
                 if name is not None and name not in known:
-                    raise ctx.child("objects").child(i).child(key).error(
-                        f"unknown material {name!r} (defined: {', '.join(sorted(known))})")
+                    raise where.child(key).error(f"unknown material {name!r} (defined: {', '.join(sorted(known))})")
 
     def material(self, name: str) -> Material:
         return self.materials.get(name, Material())

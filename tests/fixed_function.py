@@ -29,7 +29,7 @@ import os
 
 import numpy as np
 
-from cs451.scene import DirectionalLight, PointLight, Scene, Sphere
+from cs451.scene import DirectionalLight, Group, PointLight, Scene, Sphere
 
 # PyOpenGL picks its platform when OpenGL is first imported (as cs451/pyrender_shim.py does);
 # Mesa's libEGL reads EGL_PLATFORM when a display is opened.
@@ -266,6 +266,71 @@ def _draw_sphere(gl, sphere: Sphere, mesh=None) -> None:
     gl.glPopMatrix()
 
 
+def _apply(gl, call: tuple) -> None:
+    """One modelview call, made with OpenGL's own glTranslated, glRotated, glScaled, glPushMatrix, glPopMatrix."""
+    name, *args = call
+    if name == "push":
+        gl.glPushMatrix()
+    elif name == "pop":
+        gl.glPopMatrix()
+    elif name == "translate":
+        gl.glTranslated(*map(float, args))
+    elif name == "rotate":
+        gl.glRotated(*map(float, args))
+    elif name == "scale":
+        gl.glScaled(*map(float, args))
+    else:
+        raise ValueError(f"not a modelview call: {call!r}")
+
+
+def _draw_objects(gl, scene: Scene, objects: list, meshes) -> None:
+    """Spheres and groups as a fixed-function program draws them: a group's transforms between push and pop."""
+    for obj in objects:
+        if isinstance(obj, Group):
+            gl.glPushMatrix()
+            for transform in obj.transform:
+                _apply(gl, transform.call)
+            _draw_objects(gl, scene, obj.objects, meshes)
+            gl.glPopMatrix()
+            continue
+        m = scene.material(obj.material)
+        face = gl.GL_FRONT_AND_BACK
+        gl.glMaterialfv(face, gl.GL_AMBIENT, _rgba(m.ambient))
+        gl.glMaterialfv(face, gl.GL_DIFFUSE, _rgba(m.diffuse))
+        gl.glMaterialfv(face, gl.GL_SPECULAR, _rgba(m.specular))
+        gl.glMaterialfv(face, gl.GL_EMISSION, _rgba(m.emission))
+        gl.glMaterialf(face, gl.GL_SHININESS, float(m.shininess))
+        _draw_sphere(gl, obj, None if meshes is None else next(meshes))
+
+
+def model_view_matrices(view: np.ndarray, calls: list) -> np.ndarray:
+    """What OpenGL's modelview stack holds at each ``draw`` of ``calls``, starting from ``view``: (draws, 4, 4).
+
+    Mesa keeps the stack in float32, so its matrices agree with float64 ones to about 1e-7 relative.
+    """
+    ok, reason = available()
+    if not ok:
+        raise Unavailable(reason)
+    gl = _state["gl"]
+    drawn = []
+    with _Current():
+        gl.glMatrixMode(gl.GL_MODELVIEW)
+        gl.glPushMatrix()
+        try:
+            gl.glLoadMatrixd(np.asarray(view, dtype=np.float64).T.ravel())
+            for call in calls:
+                if call[0] == "draw":
+                    drawn.append(np.asarray(gl.glGetDoublev(gl.GL_MODELVIEW_MATRIX), dtype=np.float64).reshape(4, 4).T)
+                else:
+                    _apply(gl, tuple(call))
+            error = gl.glGetError()
+            if error != gl.GL_NO_ERROR:
+                raise RuntimeError(f"OpenGL error 0x{int(error):x} in the modelview calls")
+        finally:
+            gl.glPopMatrix()
+    return np.array(drawn).reshape(-1, 4, 4)
+
+
 def render(scene: Scene, size: tuple[int, int] | None = None, meshes: list | None = None) -> np.ndarray:
     """The scene's spheres drawn by the fixed-function pipeline: (h, w, 3) floats in [0, 1], top row first.
 
@@ -282,7 +347,6 @@ def render(scene: Scene, size: tuple[int, int] | None = None, meshes: list | Non
     lights = [l for l in scene.lights if isinstance(l, (PointLight, DirectionalLight))]
     if len(lights) > 8:
         raise ValueError("the fixed-function pipeline has 8 lights")
-    spheres = [o for o in scene.objects if isinstance(o, Sphere)]
     with _Current():
         fbo = gl.glGenFramebuffers(1)
         rbs = gl.glGenRenderbuffers(2)
@@ -319,15 +383,8 @@ def render(scene: Scene, size: tuple[int, int] | None = None, meshes: list | Non
                     gl.glDisable(gl.GL_LIGHT0 + i)
                 for i, light in enumerate(lights):
                     _set_light(gl, i, light)
-                for k, sphere in enumerate(spheres):
-                    m = scene.material(sphere.material)
-                    face = gl.GL_FRONT_AND_BACK
-                    gl.glMaterialfv(face, gl.GL_AMBIENT, _rgba(m.ambient))
-                    gl.glMaterialfv(face, gl.GL_DIFFUSE, _rgba(m.diffuse))
-                    gl.glMaterialfv(face, gl.GL_SPECULAR, _rgba(m.specular))
-                    gl.glMaterialfv(face, gl.GL_EMISSION, _rgba(m.emission))
-                    gl.glMaterialf(face, gl.GL_SHININESS, float(m.shininess))
-                    _draw_sphere(gl, sphere, None if meshes is None else meshes[k])
+                gl.glEnable(gl.GL_NORMALIZE)  # glScale'd groups: GL renormalises the transformed normals
+                _draw_objects(gl, scene, scene.objects, iter(meshes) if meshes is not None else None)
                 gl.glFinish()
                 gl.glPixelStorei(gl.GL_PACK_ALIGNMENT, 1)
                 gl.glReadBuffer(gl.GL_COLOR_ATTACHMENT0)

@@ -98,7 +98,7 @@ def test03_missing_function_and_wrong_signature_are_named(corpus_dir):
     init.write_text(init.read_text().replace("look_at, perspective, reshape", "look_at, reshape"))
     camera = folder / "sphere" / "camera.py"
     camera.write_text(camera.read_text().replace("def look_at(eye, center, up)", "def look_at(eye, target)"))
-    result = grade("sphere", folder, show_progress=False, tasks=["S1", "S2", "S3"], test_timeout=10)
+    result = grade("sphere", folder, show_progress=False, tasks=["S1", "S2", "S4"], test_timeout=10)
     assert any("missing function perspective()" in p for p in result.problems)
     assert any("look_at(eye, target) should take (eye, center, up)" in p for p in result.problems)
     by_task = {}
@@ -106,4 +106,4 @@ def test03_missing_function_and_wrong_signature_are_named(corpus_dir):
         by_task.setdefault(r.test.task, []).append(r)
     assert all(r.score == 0 and "missing" in r.verdict.message for r in by_task["S1"])
     assert all(r.score == 0 and "TypeError" in r.verdict.message for r in by_task["S2"])
-    assert all(r.verdict.passed for r in by_task["S3"])
+    assert all(r.verdict.passed for r in by_task["S4"])

@@ -71,14 +71,14 @@ def test07_parser_lists_the_stages():
 
 def test_compare_puts_a_render_beside_its_target_and_judges_it_as_the_tests_do(tmp_path):
     from cs451.imageio import load_png
-    target = KIT_ROOT / "assignments" / "01-sphere" / "figures" / "S4.1.png"
+    target = KIT_ROOT / "assignments" / "01-sphere" / "figures" / "S5.1.png"
     done = cs451("render", "sphere", "-o", str(tmp_path / "mine.png"))
     assert done.returncode == 0, done.stderr
     done = cs451("compare", str(tmp_path / "mine.png"), str(target), "-o", str(tmp_path / "side.png"))
     assert done.returncode == 0 and "matches" in done.stdout and "FLIP 0.000" in done.stdout, done.stdout
     side = load_png(tmp_path / "side.png")
     assert side.shape == (500 + 16, 4 * 500 + 3 * 4, 3)
-    done = cs451("compare", str(tmp_path / "mine.png"), str(target.with_name("S4.2.png")))
+    done = cs451("compare", str(tmp_path / "mine.png"), str(target.with_name("S5.2.png")))
     assert done.returncode == 2 and done.stderr.count("\n") == 1 and "--size 320x240" in done.stderr
 
 

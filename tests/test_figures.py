@@ -16,11 +16,11 @@ def test_the_handout_figures_are_in_step_with_the_reference(stage):
 
 def test_every_public_image_test_has_a_figure_and_a_release_ships_them(tmp_path):
     figures = stage_figures("sphere", show_progress=False)
-    assert [f.test.task for f in figures] == ["S4", "S4", "S4", "S5", "S5"]
+    assert [f.test.task for f in figures] == ["S5", "S5", "S5", "S6", "S6"]
     out = build_release("sphere", tmp_path / "repo")
     handout = out / "assignments" / get_stage("sphere").handout
     assert sorted(p.name for p in (handout / "figures").glob("*.png")) == sorted(f.name for f in figures)
-    assert "![S4.1](figures/S4.1.png)" in (handout / "README.md").read_text()
+    assert "![S5.1](figures/S5.1.png)" in (handout / "README.md").read_text()
 
 
 def test_a_changed_figure_is_drift(tmp_path, monkeypatch):
@@ -32,8 +32,8 @@ def test_a_changed_figure_is_drift(tmp_path, monkeypatch):
     (kit / "assignments").mkdir(parents=True)
     import shutil
     shutil.copytree(handout, kit / "assignments" / handout.name)
-    path = kit / "assignments" / handout.name / "figures" / "S4.1.png"
+    path = kit / "assignments" / handout.name / "figures" / "S5.1.png"
     image = load_png(path)
     save_png(path, np.clip(image * 0.7, 0, 1))
     monkeypatch.setattr(F, "KIT_ROOT", kit)
-    assert check_figures("sphere") == [f"assignments/{handout.name}/figures/S4.1.png: differs from the reference's render"]
+    assert check_figures("sphere") == [f"assignments/{handout.name}/figures/S5.1.png: differs from the reference's render"]

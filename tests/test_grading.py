@@ -27,7 +27,7 @@ def reference_grade(reference_grade_of):
 def test01_tests_are_declared_with_points_visibility_and_tolerance():
     tests = load_tests("sphere")
     assert sum(t.points for t in tests) == 100
-    assert {t.task for t in tests} == {f"S{i}" for i in range(1, 8)}
+    assert {t.task for t in tests} == {f"S{i}" for i in range(1, 9)}
     assert any(t.hidden for t in tests) and any(not t.hidden for t in tests)
     assert all(t.tolerance for t in tests)
     assert len({t.number for t in tests}) == len(tests)
@@ -37,15 +37,18 @@ def test01_tests_are_declared_with_points_visibility_and_tolerance():
 #: shader images and reshape, the mesh the shaders, the shaders each other); that a stubbed task costs no other
 #: task anything, over every task of every stage, is the slow contract test (tests/test_stage_contract.py)
 @pytest.mark.parametrize("file, old, new, task, consumers", [
-    ("camera.py", "s, u, -f", "s, u, f", "S2", ["S4", "S6"]),                      # look_at: forward not negated
-    ("mesh.py", "phi = -2.0 * np.pi", "phi = 2.0 * np.pi", "S3", ["S4", "S5"]),    # mesh wound clockwise
+    ("camera.py", "s, u, -f", "s, u, f", "S2", ["S5", "S7"]),                      # look_at: forward not negated
+    ("mesh.py", "phi = -2.0 * np.pi", "phi = 2.0 * np.pi", "S4", ["S5", "S6"]),    # mesh wound clockwise
     ("shaders.py", "v_color = fixed_function_lighting(p.xyz / p.w, n);", "v_color = fixed_function_lighting(p.xyz / p.w, -n);",
-     "S4", ["S5"]),
-    ("controls.py", 'if key in ("q", "Q", "escape"):', 'if key == "q":', "S7", ["S6"]),
-    # Phong without renormalising the interpolated normal (handout §S5): the coarse, close-up sphere tells
+     "S5", ["S6"]),
+    ("controls.py", 'if key in ("q", "Q", "escape"):', 'if key == "q":', "S8", ["S7"]),
+    # Phong without renormalising the interpolated normal (handout §S6): the coarse, close-up sphere tells
     ("shaders.py", "fixed_function_lighting(v_position, normalize(v_normal))", "fixed_function_lighting(v_position, v_normal)",
-     "S5", ["S4"]),
-    ("camera.py", "f = 1.0 / np.tan(np.radians(fovy) / 2.0)", "f = 1.0 / np.tan(np.radians(fovy))", "S1", ["S4", "S6"]),
+     "S6", ["S5"]),
+    ("camera.py", "f = 1.0 / np.tan(np.radians(fovy) / 2.0)", "f = 1.0 / np.tan(np.radians(fovy))", "S1", ["S5", "S7"]),
+    # the modelview product taken on the left: the first call becomes the first applied (handout §S3)
+    ("transforms.py", "stack[-1] = stack[-1] @ operations[name](*args)", "stack[-1] = operations[name](*args) @ stack[-1]",
+     "S3", ["S5", "S6"]),
 ])
 def test04_one_broken_function_loses_only_its_task(make_submission, reference_grade, file, old, new, task, consumers):
     result = grade("sphere", make_submission("sphere", file, old, new), show_progress=False, tasks=[task, *consumers])
@@ -82,7 +85,7 @@ def test07_results_json_follows_gradescope_and_report_shows_images(reference_gra
     assert html.count("data:image/png;base64") >= 4 * sum(bool(r.verdict.images) for r in reference_grade.results)
     student = write_report(tmp_path / "student", reference_grade, show_hidden=False).read_text()
     assert "hidden tests" in student and "[hidden]" not in student
-    assert "S4.1" in format_table(reference_grade)
+    assert "S5.1" in format_table(reference_grade)
     assert to_gradescope(reference_grade)["tests"][0]["status"] == "passed"
 
 
@@ -127,12 +130,12 @@ def test10_shader_errors_name_the_shader_and_count_the_students_own_lines():
         return next(i for i, line in enumerate(source.split("\n"), 1) if text in line)
 
     broken = vertex.replace("gl_Position = u_projection * p;", "gl_Position = u_projection * p")
-    with pytest.raises(KitError, match=rf"^S5: the vertex shader does not compile: line {line_of(vertex, 'gl_Position') + 1}, "):
-        SphereRenderer(ctx, (broken, fragment), [], "S5")
+    with pytest.raises(KitError, match=rf"^S6: the vertex shader does not compile: line {line_of(vertex, 'gl_Position') + 1}, "):
+        SphereRenderer(ctx, (broken, fragment), [], "S6")
     broken = fragment.replace("normalize(v_normal)", "normalise(v_normal)")
-    with pytest.raises(KitError, match=rf"^S5: the fragment shader does not compile: line {line_of(fragment, 'normalize(v_normal)')}, "):
-        SphereRenderer(ctx, (vertex, broken), [], "S5")
-    with pytest.raises(KitError, match=r"^S5: the vertex shader does not compile: line 1, column 1: preprocessor error"):
-        SphereRenderer(ctx, ("#version 330\n" + vertex, fragment), [], "S5")
-    with pytest.raises(KitError, match=r"^S5: the vertex and fragment shaders do not link"):
-        SphereRenderer(ctx, (vertex, fragment.replace("void main()", "void mane()")), [], "S5")
+    with pytest.raises(KitError, match=rf"^S6: the fragment shader does not compile: line {line_of(fragment, 'normalize(v_normal)')}, "):
+        SphereRenderer(ctx, (vertex, broken), [], "S6")
+    with pytest.raises(KitError, match=r"^S6: the vertex shader does not compile: line 1, column 1: preprocessor error"):
+        SphereRenderer(ctx, ("#version 330\n" + vertex, fragment), [], "S6")
+    with pytest.raises(KitError, match=r"^S6: the vertex and fragment shaders do not link"):
+        SphereRenderer(ctx, (vertex, fragment.replace("void main()", "void mane()")), [], "S6")

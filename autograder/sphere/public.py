@@ -1,7 +1,7 @@
 """Stage 1 public tests: students run these with ``cs451 grade sphere``.
 
 Points per task (the rubric in assignments/01-sphere/README.md):
-S1 10, S2 10, S3 20, S4 25, S5 15, S6 10, S7 10; hidden.py holds the rest of each task's points.
+S1 10, S2 10, S3 10, S4 15, S5 20, S6 15, S7 10, S8 10; hidden.py holds the rest of each task's points.
 Every case a hidden test checks (directional and attenuated lights, an infinite viewer, a minimised
 window, the limits of + and -) has a public test too, and a coarse sphere tells a Phong shader that
 renormalises the interpolated normal from one that does not.
@@ -15,7 +15,8 @@ from cs451.compare import ImageTolerance
 from cs451.grading.checks import all_of, array_close, image_matches, sub
 from cs451.grading.spec import Test, truth
 
-from cs451.scene import BUNDLED_DIR
+from cs451.scene import BUNDLED_DIR, load_scene
+from cs451.stages.sphere import drawing_calls
 
 from autograder.sphere import checks, truth as truths
 
@@ -53,14 +54,29 @@ MESH_CHECKS = all_of([("vertex and triangle counts", sub(checks.mesh_counts)),
                      require=["vertex and triangle counts"])
 
 
+#: The handout's view matrix, gluLookAt((0, 0, 8), origin, y up): a translation by -8 along z.
+HANDOUT_VIEW = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, -8.0], [0.0, 0.0, 0.0, 1.0]]
+
+
+def model_view_test(name, points, calls, view=HANDOUT_VIEW) -> Test:
+    return Test(name, "S3", points, "model_view_matrices", {"view": view, "calls": calls},
+                array_close("matrices", what="the matrices at the draws", plural=True), MATRIX_TOL, expected="none",
+                truth=truth(truths.model_view_matrices), timeout=QUICK)
+
+
+def scene_calls(name: str) -> list:
+    """The calls with which the kit places a bundled scene's spheres (``drawing_calls``), as lists."""
+    return [list(c) for c in drawing_calls(load_scene(name))]
+
+
 def mesh_test(name, points, **params) -> Test:
-    return Test(name, "S3", points, "sphere_mesh", params, MESH_CHECKS,
+    return Test(name, "S4", points, "sphere_mesh", params, MESH_CHECKS,
                 "positions within 1e-6·radius of freeglut's; normals unit within 1e-5", expected="none",
                 truth=truth(truths.sphere_mesh), timeout=QUICK)
 
 
 def shader_test(name, task, points, scene, size) -> Test:
-    shading = "gouraud" if task == "S4" else "phong"
+    shading = "gouraud" if task == "S5" else "phong"
     return Test(name, task, points, "render", {"scene": scene, "size": list(size), "shading": shading},
                 image_matches(IMAGE), IMAGE.describe(), given="parts", timeout=RENDER)
 
@@ -73,7 +89,7 @@ RESHAPE_CHECKS = all_of([("viewport covers the window", sub(checks.reshape_viewp
 
 def reshape_test(name, points, **params) -> Test:
     params.setdefault("camera", SPHERE_SCENE["camera"])
-    return Test(name, "S6", points, "reshape", params, RESHAPE_CHECKS,
+    return Test(name, "S7", points, "reshape", params, RESHAPE_CHECKS,
                 "viewport exact; aspect and field of view within 1e-6 relative", expected="none",
                 given="reshape_parts", truth=truth(truths.reshape), timeout=QUICK)
 
@@ -82,7 +98,7 @@ def keys_test(name, points, presses) -> Test:
     """One sub-check per press that changes the state; presses that change nothing are checked but earn nothing alone."""
     changing = [i for i, (key, state) in enumerate(presses) if truths.key_truth(key, state) != state]
     parts = [(f"press {i + 1} ({key!r})", sub(checks.key_press, index=i)) for i, (key, _) in enumerate(presses)]
-    return Test(name, "S7", points, "handle_key", {"presses": presses},
+    return Test(name, "S8", points, "handle_key", {"presses": presses},
                 all_of(parts, earn_with=[parts[i][0] for i in changing]), "exact", expected="none",
                 truth=truth(truths.keys), timeout=QUICK)
 
@@ -102,7 +118,7 @@ LIGHTS_AND_VIEWER = scene_variant(
     options={"sphere": {"local_viewer": False}})
 
 #: Few, large triangles seen close up under a close light: between two vertices the interpolated normal is
-#: far shorter than 1, so a Phong shader that does not renormalise it (handout §S5) is visibly darker.
+#: far shorter than 1, so a Phong shader that does not renormalise it (handout §S6) is visibly darker.
 COARSE_CLOSE = scene_variant(
     camera={"eye": [0, 0, 3.5], "center": [0, 0, 0], "up": [0, 1, 0], "fovy": 45, "near": 0.5, "far": 20},
     lights=[{"type": "point", "position": [0.5, 0.7, 2.5], "diffuse": [0.9, 0.9, 0.9], "specular": [0.5, 0.5, 0.5]}],
@@ -114,21 +130,32 @@ TESTS = [
     perspective_test("S1 perspective: 60°, wide window", 3, fovy=60, aspect=16 / 9, near=0.5, far=50),
     look_at_test("S2 look_at: the handout's camera", 3, eye=[0, 0, 8], center=[0, 0, 0], up=[0, 1, 0]),
     look_at_test("S2 look_at: an oblique camera", 3, eye=[3, 4, 5], center=[1, -1, 0.5], up=[0, 1, 0]),
-    mesh_test("S3 sphere_mesh: glutSolidSphere(1, 32, 32)", 8, radius=1.0, slices=32, stacks=32),
-    mesh_test("S3 sphere_mesh: a coarse sphere, radius 2, 8 slices, 5 stacks", 6, radius=2.0, slices=8, stacks=5),
-    shader_test("S4 Gouraud: the handout's sphere, 500×500", "S4", 10, SPHERE_SCENE, (500, 500)),
-    shader_test("S4 Gouraud: a 320×240 window", "S4", 5, SPHERE_SCENE, (320, 240)),
-    shader_test("S4 Gouraud: a directional and an attenuated point light, an infinite viewer, emission, 240×240", "S4",
-                5, LIGHTS_AND_VIEWER, (240, 240)),
-    shader_test("S5 Phong: the handout's sphere, 500×500", "S5", 8, SPHERE_SCENE, (500, 500)),
-    shader_test("S5 Phong: a coarse sphere (8 × 6) close up, under a close light, 256×256", "S5", 3, COARSE_CLOSE,
+    model_view_test("S3 model_view_matrices: the handout's sphere, one draw on the view", 1, [["draw"]]),
+    model_view_test("S3 model_view_matrices: glTranslate", 1, [["translate", 1.5, -2, 0.25], ["draw"]]),
+    model_view_test("S3 model_view_matrices: glRotate about an axis that is not unit length", 1,
+                    [["rotate", -75, 1, 2, 2], ["draw"]]),
+    model_view_test("S3 model_view_matrices: glScale", 1, [["scale", 2, 0.5, -1], ["draw"]]),
+    model_view_test("S3 model_view_matrices: the last call is the first applied", 1,
+                    [["translate", 2, 0, 0], ["rotate", 90, 0, 1, 0], ["scale", 1, 3, 1], ["draw"]]),
+    model_view_test("S3 model_view_matrices: push and pop", 1,
+                    [["rotate", 30, 0, 0, 1], ["push"], ["translate", 0, 2, 0], ["draw"], ["push"], ["scale", 2, 2, 2],
+                     ["draw"], ["pop"], ["draw"], ["pop"], ["draw"]]),
+    model_view_test("S3 model_view_matrices: the orrery's calls", 1, scene_calls("orrery")),
+    mesh_test("S4 sphere_mesh: glutSolidSphere(1, 32, 32)", 6, radius=1.0, slices=32, stacks=32),
+    mesh_test("S4 sphere_mesh: a coarse sphere, radius 2, 8 slices, 5 stacks", 5, radius=2.0, slices=8, stacks=5),
+    shader_test("S5 Gouraud: the handout's sphere, 500×500", "S5", 8, SPHERE_SCENE, (500, 500)),
+    shader_test("S5 Gouraud: a 320×240 window", "S5", 4, SPHERE_SCENE, (320, 240)),
+    shader_test("S5 Gouraud: a directional and an attenuated point light, an infinite viewer, emission, 240×240", "S5",
+                4, LIGHTS_AND_VIEWER, (240, 240)),
+    shader_test("S6 Phong: the handout's sphere, 500×500", "S6", 8, SPHERE_SCENE, (500, 500)),
+    shader_test("S6 Phong: a coarse sphere (8 × 6) close up, under a close light, 256×256", "S6", 3, COARSE_CLOSE,
                 (256, 256)),
-    reshape_test("S6 reshape: the handout's square window", 3, width=500, height=500),
-    reshape_test("S6 reshape: a wide window keeps the sphere round", 3, width=800, height=300),
-    reshape_test("S6 reshape: a window minimised to height 0", 2, width=500, height=0),
-    keys_test("S7 handle_key: q quits, s switches shading", 5,
+    reshape_test("S7 reshape: the handout's square window", 3, width=500, height=500),
+    reshape_test("S7 reshape: a wide window keeps the sphere round", 3, width=800, height=300),
+    reshape_test("S7 reshape: a window minimised to height 0", 2, width=500, height=0),
+    keys_test("S8 handle_key: q quits, s switches shading", 5,
               [["q", START], ["s", START], ["s", {**START, "shading": "phong"}], ["x", START]]),
-    keys_test("S7 handle_key: + and - stop at 256 and 4", 3,
+    keys_test("S8 handle_key: + and - stop at 256 and 4", 3,
               [["+", START], ["+", {**START, "slices": 256, "stacks": 256}], ["-", START],
                ["-", {**START, "slices": 4, "stacks": 4}]]),
 ]

@@ -1,13 +1,15 @@
 """Independent truths for stage 1, computed on the grader's side only; never shipped to students.
 
 Nothing here comes from reference/: projections come from pyrender, the view
-matrix from inverting a camera pose, the sphere from freeglut's formula, key
+matrix from inverting a camera pose, modelview transforms from trimesh, the sphere from freeglut's formula, key
 handling from the handout's table. Each truth takes a test's parameters and
 returns arrays (a student copy gets those arrays for the public tests, not this code).
 """
 from __future__ import annotations
 
 import numpy as np
+
+import trimesh.transformations as tf
 
 from cs451.pyrender_shim import pyrender
 from cs451.scene import Camera
@@ -31,6 +33,35 @@ def look_at(params: dict) -> np.ndarray:
     pose = np.eye(4)
     pose[:3, 0], pose[:3, 1], pose[:3, 2], pose[:3, 3] = x, y, z, eye
     return np.linalg.inv(pose)
+
+
+def _gl_matrix(name: str, *args: float) -> np.ndarray:
+    """glTranslate, glRotate and glScale's matrices, from trimesh's transformations (Gohlke's transformations.py)."""
+    if name == "translate":
+        return tf.translation_matrix(args)
+    if name == "rotate":
+        return tf.rotation_matrix(np.radians(args[0]), args[1:])
+    if name == "scale":
+        m = np.eye(4)
+        for axis, factor in zip(np.eye(3), args):
+            m = m @ tf.scale_matrix(factor, direction=axis)
+        return m
+    raise ValueError(f"unknown call {name!r}")
+
+
+def model_view_matrices(params: dict) -> np.ndarray:
+    """The modelview matrix at each draw: each call's matrix on the right of the current one, push and pop on a list."""
+    current, saved, drawn = np.asarray(params["view"], dtype=float), [], []
+    for name, *args in params["calls"]:
+        if name == "push":
+            saved.append(current)
+        elif name == "pop":
+            current = saved.pop()
+        elif name == "draw":
+            drawn.append(current)
+        else:
+            current = current @ _gl_matrix(name, *args)
+    return np.array(drawn).reshape(-1, 4, 4)
 
 
 def freeglut_sphere_vertices(radius: float, slices: int, stacks: int) -> np.ndarray:
@@ -65,7 +96,7 @@ def _camera(p: dict) -> dict:
 
 
 def key_truth(key: str, state: dict) -> dict:
-    """The handout's table of keys (§S7)."""
+    """The handout's table of keys (§S8)."""
     s = dict(state)
     if key in ("q", "Q", "escape"):
         s["running"] = False

@@ -2,7 +2,7 @@
 
 One window class for every stage: the sphere's (the notes' 500×500 window, resizable)
 and the radiosity and ray tracing demos' alike. Keys arrive as names (``"q"``, ``"+"``,
-``"escape"``), which is what task S7 and the demos' own controls understand.
+``"escape"``), which is what task S8 and the demos' own controls understand.
 """
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from typing import Any, Callable
 
 from ..errors import KitError
 
-#: GLFW key codes with no printable name, as the kit names them (S7's table).
+#: GLFW key codes with no printable name, as the kit names them (S8's table).
 SPECIAL_KEYS = {"ESCAPE": "escape", "EQUAL": "+", "KP_ADD": "+", "MINUS": "-", "KP_SUBTRACT": "-",
                 "LEFT": "left", "RIGHT": "right", "UP": "up", "DOWN": "down", "SPACE": "space"}
 

@@ -1,6 +1,6 @@
 """Stage 1's demo: the course notes' window (500 × 500 at (100, 100), "Sphere", resizable), or its images.
 
-Keys go through the student's S7 (q quits, s switches Gouraud/Phong, + and - change the
+Keys go through the student's S8 (q quits, s switches Gouraud/Phong, + and - change the
 tessellation); the mesh is built once per tessellation, as the notes' display list was.
 """
 from __future__ import annotations
@@ -34,6 +34,7 @@ def _window(module: Any, frames: int | None) -> None:
         renderers: dict[tuple, s1.SphereRenderer] = {}
         cam = scene.camera
         view = s1._look_at(module, cam.eye, cam.center, cam.up)
+        model_views = s1._model_views(module, view, s1.drawing_calls(scene))
         while state.running and not win.done(frames):
             for key in win.keys():
                 state = s1._key(module, key, state)
@@ -46,7 +47,7 @@ def _window(module: Any, frames: int | None) -> None:
 
             def draw() -> None:
                 win.ctx.viewport = viewport
-                renderers[tessellation].draw(scene, view, projection, s1.STAGE.options(scene).local_viewer)
+                renderers[tessellation].draw(scene, view, model_views, projection, s1.STAGE.options(scene).local_viewer)
             win.show(draw)
     finally:
         win.close()

@@ -253,7 +253,7 @@ def functions_replaced(stage: Stage, impl: Any, wrappers: dict[str, Callable[[An
     implementation's package that holds it, under whatever name, so that its other functions call the replacement.
 
     How a later task's test gets trusted answers from an earlier task the submission's code calls (W11's trace
-    calling W8 to W10, S6's reshape calling S1), and how the reference's calls are recorded to give them.
+    calling W8 to W10, S7's reshape calling S1), and how the reference's calls are recorded to give them.
     """
     own = {task: getattr(impl, stage.task(task).function, None) for task in wrappers}
     changed = []

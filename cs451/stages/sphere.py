@@ -17,7 +17,7 @@ import numpy as np
 from .. import schema
 from ..errors import KitError
 from ..gl import compile_program, create_context
-from ..scene import Camera, DirectionalLight, PointLight, Scene, Sphere, parse_scene
+from ..scene import Camera, DirectionalLight, Group, PointLight, Scene, Sphere, parse_scene, walk_objects
 from ..schema import Context, field
 from .base import Out, Probes, Stage, Task, functions_replaced
 
@@ -50,20 +50,21 @@ SHADERS = (Out("vertex_source", kind="text"), Out("fragment_source", kind="text"
 TASKS = (
     Task("S1", "perspective", "Perspective projection", ("fovy", "aspect", "near", "far"), (Out("matrix", (4, 4)),)),
     Task("S2", "look_at", "The look-at view matrix", ("eye", "center", "up"), (Out("matrix", (4, 4)),)),
-    Task("S3", "sphere_mesh", "The sphere mesh", ("radius", "slices", "stacks"),
+    Task("S3", "model_view_matrices", "The modelview matrix", ("view", "calls"), (Out("matrices", (None, 4, 4)),)),
+    Task("S4", "sphere_mesh", "The sphere mesh", ("radius", "slices", "stacks"),
          (Out("positions", (None, 3)), Out("normals", ("len(positions)", 3)),
           Out("triangles", (None, 3), "i", below="len(positions)"))),
-    Task("S4", "gouraud_shaders", "Gouraud shading", (), SHADERS),
-    Task("S5", "phong_shaders", "Phong shading", (), SHADERS),
-    Task("S6", "reshape", "Resizing the window", ("width", "height", "camera"),
+    Task("S5", "gouraud_shaders", "Gouraud shading", (), SHADERS),
+    Task("S6", "phong_shaders", "Phong shading", (), SHADERS),
+    Task("S7", "reshape", "Resizing the window", ("width", "height", "camera"),
          (Out("viewport", (4,), "i"), Out("projection", (4, 4)))),
-    Task("S7", "handle_key", "Keyboard controls", ("key", "state"), (Out("state", kind="any"),)),
+    Task("S8", "handle_key", "Keyboard controls", ("key", "state"), (Out("state", kind="any"),)),
 )
 
 
 @dataclass(frozen=True)
 class ViewState:
-    """What the keyboard changes in the viewer (S7)."""
+    """What the keyboard changes in the viewer (S8)."""
     running: bool = True
     shading: Literal["gouraud", "phong"] = "gouraud"
     slices: int = 32
@@ -77,13 +78,39 @@ class SphereOptions:
 
 
 def spheres(scene: Scene) -> list[Sphere]:
-    for k, obj in enumerate(scene.objects):
+    """The scene's spheres in drawing order, groups walked depth first."""
+    found = []
+    for obj, where in walk_objects(scene.objects):
         if not isinstance(obj, Sphere):
-            raise KitError(f"{scene.label}: objects[{k}]: stage 1 draws spheres, not a {type(obj).__name__}")
-    found = list(scene.objects)
+            raise KitError(f"{scene.label}: {where.path}: stage 1 draws spheres, not a {type(obj).__name__}")
+        found.append(obj)
     if not found:
         raise KitError(f"{scene.label}: objects: stage 1 draws spheres, and this scene has none")
     return found
+
+
+def drawing_calls(scene: Scene) -> list[tuple]:
+    """The modelview calls that place the scene's spheres, in the order an OpenGL 1.x program would make them.
+
+    A group is ``push``, its transforms in order, its objects, ``pop``; a sphere off the origin is ``push``,
+    ``translate`` to its centre, ``draw``, ``pop``; a sphere at the origin is just ``draw``. One ``draw`` per
+    sphere of :func:`spheres`, in the same order: what S3 runs.
+    """
+    calls: list[tuple] = []
+
+    def place(objects: list) -> None:
+        for obj in objects:
+            if isinstance(obj, Group):
+                calls.append(("push",))
+                calls.extend(t.call for t in obj.transform)
+                place(obj.objects)
+                calls.append(("pop",))
+            elif any(obj.center):
+                calls.extend([("push",), ("translate", *map(float, obj.center)), ("draw",), ("pop",)])
+            else:
+                calls.append(("draw",))
+    place(scene.objects)
+    return calls
 
 
 # --- calling the student's functions, with checks on what they return --------
@@ -96,23 +123,31 @@ def _look_at(impl: Any, eye: Any, center: Any, up: Any) -> np.ndarray:
     return STAGE.call(impl, "S2", np.array(eye, float), np.array(center, float), np.array(up, float))
 
 
+def _model_views(impl: Any, view: np.ndarray, calls: list[tuple]) -> np.ndarray:
+    matrices = STAGE.call(impl, "S3", np.array(view, float), [tuple(c) for c in calls])
+    draws = sum(1 for c in calls if c[0] == "draw")
+    if len(matrices) != draws:
+        raise KitError(f"S3 model_view_matrices() returned {len(matrices)} matrices for {draws} draw calls")
+    return matrices
+
+
 def _mesh(impl: Any, radius: float, slices: int, stacks: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    return STAGE.call(impl, "S3", radius, slices, stacks)
+    return STAGE.call(impl, "S4", radius, slices, stacks)
 
 
 def _shaders(impl: Any, shading: str) -> tuple[str, str]:
-    return STAGE.call(impl, "S4" if shading == "gouraud" else "S5")
+    return STAGE.call(impl, "S5" if shading == "gouraud" else "S6")
 
 
 def _reshape(impl: Any, width: int, height: int, camera: Camera) -> tuple[tuple[int, int, int, int], np.ndarray]:
-    viewport, projection = STAGE.call(impl, "S6", width, height, camera)
+    viewport, projection = STAGE.call(impl, "S7", width, height, camera)
     return tuple(int(v) for v in viewport), projection  # type: ignore[return-value]
 
 
 def _key(impl: Any, key: str, state: ViewState) -> ViewState:
-    out = STAGE.call(impl, "S7", key, state)
+    out = STAGE.call(impl, "S8", key, state)
     if not isinstance(out, ViewState):
-        raise KitError(f"S7 handle_key() must return a ViewState, got {type(out).__name__}")
+        raise KitError(f"S8 handle_key() must return a ViewState, got {type(out).__name__}")
     return out
 
 
@@ -145,7 +180,7 @@ class SphereRenderer:
     """Buffers built once, drawn every frame: the display list of the original program, in modern OpenGL."""
 
     def __init__(self, ctx: Any, shaders: tuple[str, str], meshes: list[tuple[np.ndarray, np.ndarray, np.ndarray]],
-                 task: str = "S4"):
+                 task: str = "S5"):
         self.ctx = ctx
         vs, fs = shaders
         self.program = compile_program(ctx, task, (GLSL_INTERFACE + VERTEX_INPUTS, vs, ""),
@@ -162,7 +197,9 @@ class SphereRenderer:
         if name in self.program:  # the GLSL compiler drops uniforms a shader does not use
             self.program[name].write(np.asarray(value, dtype="i4" if name == "u_num_lights" else "f4").tobytes())
 
-    def draw(self, scene: Scene, view: np.ndarray, projection: np.ndarray, local_viewer: bool) -> None:
+    def draw(self, scene: Scene, view: np.ndarray, model_views: np.ndarray, projection: np.ndarray,
+             local_viewer: bool) -> None:
+        """One frame: lights placed by ``view`` (as glLightfv after gluLookAt), sphere k by ``model_views[k]``."""
         ctx = self.ctx
         ctx.enable(ctx.DEPTH_TEST)
         ctx.clear(*scene.image.background, 1.0, depth=1.0)
@@ -172,10 +209,7 @@ class SphereRenderer:
         self._set("u_global_ambient", scene.ambient)
         if "u_local_viewer" in self.program:
             self.program["u_local_viewer"].value = bool(local_viewer)
-        for vao, sphere in zip(self.vaos, spheres(scene)):
-            model = np.eye(4)
-            model[:3, 3] = sphere.center
-            model_view = view @ model
+        for vao, sphere, model_view in zip(self.vaos, spheres(scene), model_views):
             m = scene.material(sphere.material)
             self._set("u_model_view", model_view.T)
             self._set("u_normal_matrix", np.linalg.inv(model_view[:3, :3]))  # (M^-1)^T, transposed for GL
@@ -196,7 +230,8 @@ def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, shading
            given: dict[str, Any] | None = None, ctx: Any = None) -> np.ndarray:
     """Render a stage-1 scene with a student's functions; ``given`` replaces some of them with trusted values.
 
-    ``given`` may hold ``viewport``, ``projection``, ``view`` and ``mesh0``, ``mesh1``… (one per sphere).
+    ``given`` may hold ``viewport``, ``projection``, ``view``, ``model_views`` and ``mesh0``, ``mesh1``… (one per
+    sphere).
     Returns a linear float image (h, w, 3) in [0, 1], 8 bits deep as the original window.
     """
     given = given or {}
@@ -209,6 +244,7 @@ def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, shading
     else:
         viewport, projection = _reshape(impl, width, height, cam)
     view = given["view"] if "view" in given else _look_at(impl, cam.eye, cam.center, cam.up)
+    model_views = given["model_views"] if "model_views" in given else _model_views(impl, view, drawing_calls(scene))
     meshes = [given.get(f"mesh{i}") or _mesh(impl, s.radius, s.slices, s.stacks) for i, s in enumerate(spheres(scene))]
     shaders = _shaders(impl, shading)
     ctx = ctx or create_context()
@@ -216,8 +252,8 @@ def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, shading
                           depth_attachment=ctx.depth_renderbuffer((width, height)))
     fbo.use()
     ctx.viewport = tuple(int(v) for v in viewport)
-    renderer = SphereRenderer(ctx, shaders, meshes, task="S4" if shading == "gouraud" else "S5")
-    renderer.draw(scene, view, projection, opts.local_viewer)
+    renderer = SphereRenderer(ctx, shaders, meshes, task="S5" if shading == "gouraud" else "S6")
+    renderer.draw(scene, view, model_views, projection, opts.local_viewer)
     ctx.finish()
     return _read_pixels(fbo, width, height)
 
@@ -238,6 +274,11 @@ def probe_look_at(impl: Any, eye: list, center: list, up: list) -> dict[str, np.
 
 
 @PROBES.register
+def probe_model_view_matrices(impl: Any, view: list, calls: list) -> dict[str, np.ndarray]:
+    return {"matrices": _model_views(impl, np.array(view, float), calls)}
+
+
+@PROBES.register
 def probe_sphere_mesh(impl: Any, radius: float, slices: int, stacks: int) -> dict[str, np.ndarray]:
     positions, normals, triangles = _mesh(impl, radius, slices, stacks)
     return {"positions": positions, "normals": normals, "triangles": triangles}
@@ -249,7 +290,7 @@ PERSPECTIVE_ARGS = ("fovy", "aspect", "near", "far")
 @PROBES.register
 def probe_reshape(impl: Any, width: int, height: int, camera: dict, perspective_query: np.ndarray | None = None,
                   perspective_answer: np.ndarray | None = None) -> dict[str, np.ndarray]:
-    """The submission's S6. Given the reference's S1 answer (:func:`probe_reshape_parts`), a call of the
+    """The submission's S7. Given the reference's S1 answer (:func:`probe_reshape_parts`), a call of the
     submission's S1 with the same arguments gets that answer, so that an S1 bug costs S1's points only."""
     cam = schema.parse_record(Camera, camera, Context("<probe>", "camera"))
     if perspective_query is None or perspective_answer is None:
@@ -271,7 +312,7 @@ def probe_reshape(impl: Any, width: int, height: int, camera: dict, perspective_
 
 @PROBES.register
 def probe_reshape_parts(impl: Any, width: int, height: int, camera: dict) -> dict[str, np.ndarray]:
-    """Trusted input of a reshape test (run on the reference only): the call its S6 makes to S1, and the answer."""
+    """Trusted input of a reshape test (run on the reference only): the call its S7 makes to S1, and the answer."""
     calls: list = []
 
     def wrap(own: Any) -> Any:
@@ -302,7 +343,9 @@ def probe_parts(impl: Any, scene: dict, size: list[int], shading: str | None = N
     sc = parse_scene(scene, "<probe scene>")
     viewport, projection = _reshape(impl, size[0], size[1], sc.camera)
     cam = sc.camera
-    out = {"viewport": np.array(viewport), "projection": projection, "view": _look_at(impl, cam.eye, cam.center, cam.up)}
+    view = _look_at(impl, cam.eye, cam.center, cam.up)
+    out = {"viewport": np.array(viewport), "projection": projection, "view": view,
+           "model_views": _model_views(impl, view, drawing_calls(sc))}
     for i, s in enumerate(spheres(sc)):
         for key, arr in zip(("positions", "normals", "triangles"), _mesh(impl, s.radius, s.slices, s.stacks)):
             out[f"mesh{i}_{key}"] = arr
@@ -317,8 +360,9 @@ def probe_render(impl: Any, scene: dict, size: list[int], shading: str | None = 
     if "projection" in given_arrays:
         given["projection"] = given_arrays["projection"]
         given["viewport"] = tuple(int(v) for v in given_arrays["viewport"])
-    if "view" in given_arrays:
-        given["view"] = given_arrays["view"]
+    for name in ("view", "model_views"):
+        if name in given_arrays:
+            given[name] = given_arrays[name]
     i = 0
     while f"mesh{i}_positions" in given_arrays:
         given[f"mesh{i}"] = tuple(given_arrays[f"mesh{i}_{k}"] for k in ("positions", "normals", "triangles"))
@@ -341,14 +385,14 @@ def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
     from ..limits import Cost
     w, h = size or (scene.image.width, scene.image.height)
     costs = [Cost("image.width", 64.0 * w * h, f"a {w}x{h} image")]
-    for k, obj in enumerate(scene.objects):
+    for obj, where in walk_objects(scene.objects):
         if isinstance(obj, Sphere):
-            costs.append(Cost(f"objects[{k}].slices", MESH_CELL_BYTES * obj.slices * obj.stacks,
+            costs.append(Cost(f"{where.path}.slices", MESH_CELL_BYTES * obj.slices * obj.stacks,
                               f"a mesh of {obj.slices} × {obj.stacks} cells"))
     return costs
 
 
 STAGE = Stage(
     name="sphere", number=1, title="The lit sphere", handout="01-sphere", tasks=TASKS, render=render, probes=PROBES,
-    demo=demo, options_type=SphereOptions, draws=(Sphere, PointLight, DirectionalLight), estimate=estimate,
+    demo=demo, options_type=SphereOptions, draws=(Sphere, Group, PointLight, DirectionalLight), estimate=estimate,
 )

@@ -1,4 +1,4 @@
-"""S7: the GLUT keyboard callback, as a pure function of the key and the viewer's state."""
+"""S8: the GLUT keyboard callback, as a pure function of the key and the viewer's state."""
 from __future__ import annotations
 
 from cs451.stages.sphere import ViewState
@@ -12,7 +12,7 @@ def handle_key(key: str, state: ViewState) -> ViewState:
     ``+`` doubles ``slices`` and ``stacks`` (at most 256), ``-`` halves them (at least 4);
     any other key changes nothing.
     """
-    # BEGIN SOLUTION S7: one branch per key; dataclasses.replace builds the new state (handout §S7)
+    # BEGIN SOLUTION S8: one branch per key; dataclasses.replace builds the new state (handout §S8)
     import dataclasses
     if key in ("q", "Q", "escape"):
         return dataclasses.replace(state, running=False)

@@ -1,4 +1,4 @@
-"""S3: the sphere of glutSolidSphere as a triangle mesh, built once and drawn every frame."""
+"""S4: the sphere of glutSolidSphere as a triangle mesh, built once and drawn every frame."""
 from __future__ import annotations
 
 import numpy as np
@@ -13,7 +13,7 @@ def sphere_mesh(radius: float, slices: int, stacks: int) -> tuple:
     As in freeglut: poles on the z axis, ``slices * (stacks - 1) + 2`` vertices,
     ``2 * slices * (stacks - 1)`` triangles.
     """
-    # BEGIN SOLUTION S3: rings of vertices from the north pole down, then fans and strips of triangles (handout §S3)
+    # BEGIN SOLUTION S4: rings of vertices from the north pole down, then fans and strips of triangles (handout §S4)
     theta = np.pi * np.arange(1, stacks) / stacks              # ring angles from +z
     phi = -2.0 * np.pi * np.arange(slices) / slices            # freeglut walks clockwise seen from +z
     st, ct = np.sin(theta)[:, None], np.cos(theta)[:, None]

@@ -1,4 +1,4 @@
-"""S4, S5: shaders that reproduce OpenGL 1.x fixed-function lighting.
+"""S5, S6: shaders that reproduce OpenGL 1.x fixed-function lighting.
 
 The kit puts ``#version 330`` and the declarations of every uniform and input
 in front of your source (see ``GLSL_INTERFACE`` in ``cs451/stages/sphere.py``):
@@ -47,7 +47,7 @@ def gouraud_shaders() -> tuple[str, str]:
 
     Returns ``(vertex_source, fragment_source)`` without the ``#version`` line.
     """
-    # BEGIN SOLUTION S4: light each vertex in eye space, pass the colour down, interpolate (handout §S4)
+    # BEGIN SOLUTION S5: light each vertex in eye space, pass the colour down, interpolate (handout §S5)
     vertex = LIGHTING_GLSL + """
 out vec3 v_color;
 void main() {
@@ -72,7 +72,7 @@ def phong_shaders() -> tuple[str, str]:
 
     Returns ``(vertex_source, fragment_source)`` without the ``#version`` line.
     """
-    # BEGIN SOLUTION S5: pass eye-space position and normal down, renormalise, light per fragment (handout §S5)
+    # BEGIN SOLUTION S6: pass eye-space position and normal down, renormalise, light per fragment (handout §S6)
     vertex = """
 out vec3 v_position;
 out vec3 v_normal;

@@ -1,4 +1,4 @@
-"""S1, S2, S6: the matrices that replace gluPerspective, gluLookAt and the GLUT reshape callback.
+"""S1, S2, S7: the matrices that replace gluPerspective, gluLookAt and the GLUT reshape callback.
 
 Matrices are numpy float64 arrays of shape (4, 4) acting on column vectors
 (``clip = P @ V @ p``), as in the OpenGL specification; the kit transposes them
@@ -35,5 +35,5 @@ def reshape(width: int, height: int, camera) -> tuple:
     where the viewport covers the whole window and ``projection`` is (4, 4), from your
     ``perspective`` (S1). A window may be minimised to a height of 0: do not divide by zero.
     """
-    # TODO S6: cover the window, and use its aspect ratio in the projection (handout §S6)
-    raise NotImplementedError("S6: cover the window, and use its aspect ratio in the projection (handout §S6)")
+    # TODO S7: cover the window, and use its aspect ratio in the projection (handout §S7)
+    raise NotImplementedError("S7: cover the window, and use its aspect ratio in the projection (handout §S7)")

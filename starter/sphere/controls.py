@@ -1,4 +1,4 @@
-"""S7: the GLUT keyboard callback, as a pure function of the key and the viewer's state."""
+"""S8: the GLUT keyboard callback, as a pure function of the key and the viewer's state."""
 from __future__ import annotations
 
 from cs451.stages.sphere import ViewState
@@ -12,5 +12,5 @@ def handle_key(key: str, state: ViewState) -> ViewState:
     ``+`` doubles ``slices`` and ``stacks`` (at most 256), ``-`` halves them (at least 4);
     any other key changes nothing.
     """
-    # TODO S7: one branch per key; dataclasses.replace builds the new state (handout §S7)
-    raise NotImplementedError("S7: one branch per key; dataclasses.replace builds the new state (handout §S7)")
+    # TODO S8: one branch per key; dataclasses.replace builds the new state (handout §S8)
+    raise NotImplementedError("S8: one branch per key; dataclasses.replace builds the new state (handout §S8)")

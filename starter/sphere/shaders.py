@@ -1,4 +1,4 @@
-"""S4, S5: shaders that reproduce OpenGL 1.x fixed-function lighting.
+"""S5, S6: shaders that reproduce OpenGL 1.x fixed-function lighting.
 
 The kit puts ``#version 330`` and the declarations of every uniform and input
 in front of your source (see ``GLSL_INTERFACE`` in ``cs451/stages/sphere.py``):
@@ -14,8 +14,8 @@ def gouraud_shaders() -> tuple[str, str]:
 
     Returns ``(vertex_source, fragment_source)`` without the ``#version`` line.
     """
-    # TODO S4: light each vertex in eye space, pass the colour down, interpolate (handout §S4)
-    raise NotImplementedError("S4: light each vertex in eye space, pass the colour down, interpolate (handout §S4)")
+    # TODO S5: light each vertex in eye space, pass the colour down, interpolate (handout §S5)
+    raise NotImplementedError("S5: light each vertex in eye space, pass the colour down, interpolate (handout §S5)")
 
 
 def phong_shaders() -> tuple[str, str]:
@@ -23,5 +23,5 @@ def phong_shaders() -> tuple[str, str]:
 
     Returns ``(vertex_source, fragment_source)`` without the ``#version`` line.
     """
-    # TODO S5: pass eye-space position and normal down, renormalise, light per fragment (handout §S5)
-    raise NotImplementedError("S5: pass eye-space position and normal down, renormalise, light per fragment (handout §S5)")
+    # TODO S6: pass eye-space position and normal down, renormalise, light per fragment (handout §S6)
+    raise NotImplementedError("S6: pass eye-space position and normal down, renormalise, light per fragment (handout §S6)")
