@@ -82,11 +82,12 @@ def _cmd_starter(a: argparse.Namespace) -> int:
 
 
 def _cmd_figures(a: argparse.Namespace) -> int:
+    from .packaging.diagrams import check_diagrams, write_diagrams
     from .packaging.figures import check_figures, write_figures
     from .stages import stage_names
     stages = [a.stage] if a.stage else stage_names()
     if a.check:
-        problems = [p for s in stages for p in check_figures(s)]
+        problems = [p for s in stages for p in check_figures(s) + check_diagrams(s)]
         for p in problems:
             print(p)
         if problems:
@@ -97,7 +98,9 @@ def _cmd_figures(a: argparse.Namespace) -> int:
         return 0
     for s in stages:
         files = write_figures(s)
-        print(f"{s}: wrote {len(files) - 1} figures and the handout's figures block")
+        diagrams = write_diagrams(s)
+        print(f"{s}: wrote {len(files) - 1} figures and the handout's figures block"
+              + (f", and {len(diagrams)} diagrams" if diagrams else ""))
     return 0
 
 

@@ -226,6 +226,8 @@ def build(scene: Any, max_depth: int = 5, min_weight: float = 0.01, light_sample
     tris, tri_mat = [], []
     planes = []
     for i, obj in enumerate(scene.objects):
+        if not isinstance(obj, (Sphere, Polygon, Mesh, Plane)):
+            raise KitError(f"{label}: objects[{i}]: stage 2 cannot trace a {type(obj).__name__}")
         m = index[obj.material]
         if isinstance(obj, Sphere):
             centers.append(obj.center)

@@ -313,6 +313,9 @@ def resolve_scene_path(name_or_path: str | Path) -> Path:
                    f"(bundled: {', '.join(bundled_scenes())})")
 
 
+TOO_DEEP = f"nested too deeply (groups nest at most {MAX_GROUP_DEPTH} deep)"
+
+
 def load_scene(name_or_path: str | Path) -> Scene:
     """Load and validate a scene; raises InputError naming the file and field on bad input."""
     path = resolve_scene_path(name_or_path)
@@ -323,6 +326,8 @@ def load_scene(name_or_path: str | Path) -> Scene:
         raise InputError(label, f"line {err.lineno} column {err.colno}", f"invalid JSON: {err.msg}") from None
     except ValueError as err:
         raise InputError(label, "", str(err)) from None
+    except RecursionError:
+        raise InputError(label, "", TOO_DEEP) from None
     return parse_scene(data, label, source=str(path))
 
 
@@ -330,7 +335,10 @@ def parse_scene(data: Any, label: str = "<scene>", source: str = "") -> Scene:
     """Validate a scene given as a JSON-like dict (Mitsuba-style: scenes are plain dicts too)."""
     if isinstance(data, dict) and "source" in data:
         raise InputError(label, "source", "unknown field (set by the loader, not by the file)")
-    scene = schema.parse_record(Scene, data, Context(label))
+    try:
+        scene = schema.parse_record(Scene, data, Context(label))
+    except RecursionError:
+        raise InputError(label, "objects", TOO_DEEP) from None
     object.__setattr__(scene, "source", source)
     return scene
 

@@ -41,7 +41,7 @@ def test02_sphere_scene_matches_the_original_program():
     s = load_scene("sphere")
     assert (s.camera.fovy, s.camera.near, s.camera.far, s.camera.eye) == (30, 2, 100, (0, 0, 8))
     light = s.lights[0]
-    assert light.position == (10, 5, 20) and light.space == "eye" and light.diffuse == (0.9, 0.9, 0.9)
+    assert light.position == (10, 5, 20) and light.space == "world" and light.diffuse == (0.9, 0.9, 0.9)  # set after gluLookAt
     m = s.material("green")
     assert m.diffuse == (0.3, 0.9, 0.5) and m.shininess == 50 and m.ambient == (0.2, 0.2, 0.2)  # GL default ambient
     assert isinstance(s.objects[0], Sphere) and (s.objects[0].slices, s.objects[0].stacks) == (32, 32)
@@ -101,3 +101,36 @@ def test06_cli_prints_one_line_without_traceback(tmp_path):
 def test07_fields_are_described_once_for_the_handout():
     text = describe(Material)
     assert "`diffuse`" in text and "default `(0.8, 0.8, 0.8)`" in text
+
+
+def _nested(depth: int) -> str:
+    """A scene file whose one sphere sits ``depth`` groups deep, written as text (json.dumps would recurse)."""
+    inner = '{"type": "group", "objects": [' * depth + '{"type": "sphere", "radius": 1}' + "]}" * depth
+    return '{"camera": {"eye": [0, 0, 8], "center": [0, 0, 0]}, "objects": [' + inner + "]}"
+
+
+@pytest.mark.parametrize("depth, error", [(31, None), (32, "groups nest at most 31 deep"),
+                                          (400, "nested too deeply"), (50_000, "nested too deeply")])
+def test08_groups_nest_as_deep_as_the_modelview_stack_and_no_deeper(tmp_path, depth, error):
+    path = tmp_path / f"nested-{depth}.json"
+    path.write_text(_nested(depth))
+    if error is None:
+        assert load_scene(path).objects[0].objects[0].objects
+        return
+    with pytest.raises(InputError, match=error) as err:
+        load_scene(path)
+    assert str(path) in str(err.value) and "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("transform, where, what", [
+    ({"type": "scale", "factors": [1, 0, 1]}, "transform[0].factors", "no factor may be 0"),
+    ({"type": "rotate", "angle": 30, "axis": [0, 0, 0]}, "transform[0].axis", "must not be the zero vector"),
+    ({"type": "shear", "amount": 1}, "transform[0].type", "unknown transform type 'shear'"),
+    ({"type": "translate"}, "transform[0].offset", "missing required field"),
+])
+def test09_bad_transforms_are_named(transform, where, what):
+    data = {"camera": {"eye": [0, 0, 8], "center": [0, 0, 0]},
+            "objects": [{"type": "group", "transform": [transform], "objects": [{"type": "sphere", "radius": 1}]}]}
+    with pytest.raises(InputError, match=what) as err:
+        parse_scene(data, "t.json")
+    assert f"objects[0].{where}" in str(err.value)

@@ -49,6 +49,9 @@ ITEMS = {
     "area": {"type": "area", "corner": [-0.3, 1.4, -0.3], "edge_u": [0.6, 0, 0], "edge_v": [0, 0, 0.6],
              "radiance": [4, 4, 4], "samples": 2},
     "spot": {"type": "spot", "position": [0, 3, 3], "direction": [0, -1, -1]},
+    "group": {"type": "group", "transform": [{"type": "translate", "offset": [-0.5, 0, 0.4]},
+                                             {"type": "scale", "factors": [0.3, 0.2, 0.3]}],
+              "objects": [{"type": "sphere", "radius": 1, "slices": 8, "stacks": 6}]},
 }
 
 #: two facing walls lit by an area light: the smallest scene stages 3 and 4 draw
@@ -159,3 +162,13 @@ def test_declared_kinds_are_scene_kinds():
         for cls in get_stage(stage).draws:
             assert cls in Light._registry.values() or cls in Object._registry.values(), (stage, cls)
     assert all(get_stage(s).draws for s in stage_names()), "a stage that declares no kinds would refuse every scene"
+
+
+def test_a_group_holding_what_stage_1_does_not_draw_is_refused_by_its_path(tmp_path):
+    """A plane inside a group gets past the top-level check; the walk of the groups names it where it is."""
+    data = with_item("sphere", "group")
+    data["objects"][-1]["objects"].append(ITEMS["plane"])
+    path = tmp_path / "plane-in-a-group.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(KitError, match=r"objects\[1\]\.objects\[1\]: stage 1 draws spheres, not a Plane"):
+        render_scene(scene=str(path), output=tmp_path / "out.png", stage="sphere", size=SIZE)

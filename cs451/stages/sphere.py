@@ -96,6 +96,7 @@ def drawing_calls(scene: Scene) -> list[tuple]:
     ``translate`` to its centre, ``draw``, ``pop``; a sphere at the origin is just ``draw``. One ``draw`` per
     sphere of :func:`spheres`, in the same order: what S3 runs.
     """
+    spheres(scene)  # refuses, by its path, anything in a group that is not a sphere
     calls: list[tuple] = []
 
     def place(objects: list) -> None:
