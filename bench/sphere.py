@@ -19,11 +19,12 @@ from cs451.stages import sphere as s1
 
 
 def _frame_time(ctx, renderer, scene, view, projection, repeats: int) -> float:
-    renderer.draw(scene, view, projection, True)
+    model_views = [view]  # the bundled sphere sits at the origin: its modelview matrix is the view
+    renderer.draw(scene, view, model_views, projection, True)
     ctx.finish()
     start = time.perf_counter()
     for _ in range(repeats):
-        renderer.draw(scene, view, projection, True)
+        renderer.draw(scene, view, model_views, projection, True)
         ctx.finish()
     return (time.perf_counter() - start) / repeats
 
@@ -41,7 +42,7 @@ def main(output: Path, quick: bool = False) -> dict:
     view = impl.look_at(cam.eye, cam.center, cam.up)
 
     def image_of(renderer) -> np.ndarray:
-        renderer.draw(scene, view, projection, True)
+        renderer.draw(scene, view, [view], projection, True)
         ctx.finish()
         return s1._read_pixels(fbo, w, h)
 

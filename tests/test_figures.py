@@ -37,3 +37,28 @@ def test_a_changed_figure_is_drift(tmp_path, monkeypatch):
     save_png(path, np.clip(image * 0.7, 0, 1))
     monkeypatch.setattr(F, "KIT_ROOT", kit)
     assert check_figures("sphere") == [f"assignments/{handout.name}/figures/S5.1.png: differs from the reference's render"]
+
+
+def test_the_handout_diagrams_are_in_step_ship_and_a_changed_one_is_drift(tmp_path, monkeypatch):
+    """Stage 1's explanatory pictures (where the light is, the modelview order): drawn by the reference, shipped."""
+    import shutil
+
+    import numpy as np
+
+    import cs451.packaging.diagrams as D
+    from cs451.imageio import load_png, save_png
+    handout = KIT_ROOT / "assignments" / get_stage("sphere").handout
+    assert D.check_diagrams("sphere") == []
+    text = (handout / "README.md").read_text()
+    for name in get_stage("sphere").diagrams():
+        assert f"](diagrams/{name})" in text, f"the handout does not show {name}"
+    out = build_release("sphere", tmp_path / "repo")
+    shipped = out / "assignments" / handout.name / "diagrams"
+    assert sorted(p.name for p in shipped.glob("*.png")) == sorted(get_stage("sphere").diagrams())
+    kit = tmp_path / "kit"
+    shutil.copytree(handout, kit / "assignments" / handout.name)
+    path = kit / "assignments" / handout.name / "diagrams" / "light-spaces.png"
+    save_png(path, np.flip(load_png(path), axis=1))   # the two panels swapped: the light on the wrong side
+    monkeypatch.setattr(D, "KIT_ROOT", kit)
+    assert D.check_diagrams("sphere") == [f"assignments/{handout.name}/diagrams/light-spaces.png: differs from the "
+                                          f"reference's render"]

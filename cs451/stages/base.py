@@ -79,6 +79,9 @@ class Stage:
     #: estimate(scene, size) -> list of cs451.limits.Cost: the memory a render of the scene needs, from its
     #: parameters alone (see :meth:`check_cost`)
     estimate: Callable[..., list] | None = None
+    #: diagrams() -> {file name: draw() -> uint8 RGB image}: the handout's explanatory pictures
+    #: (:mod:`cs451.packaging.diagrams`), loaded only when asked for
+    diagrams: Callable[[], dict[str, Callable[[], np.ndarray]]] | None = None
 
     def task(self, task_id: str) -> Task:
         for t in self.tasks:

@@ -393,7 +393,14 @@ def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
     return costs
 
 
+def diagrams() -> dict:
+    """The handout's pictures of where the light is and of the modelview order (:mod:`._sphere_diagrams`)."""
+    from ._sphere_diagrams import PICTURES
+    return PICTURES
+
+
 STAGE = Stage(
     name="sphere", number=1, title="The lit sphere", handout="01-sphere", tasks=TASKS, render=render, probes=PROBES,
     demo=demo, options_type=SphereOptions, draws=(Sphere, Group, PointLight, DirectionalLight), estimate=estimate,
+    diagrams=diagrams,
 )
