@@ -42,11 +42,11 @@ def mutate(data: dict, rng: random.Random) -> dict:
     places = [p for p, _ in paths(data) if p]
     for _ in range(rng.choice((1, 1, 2, 3))):
         path = rng.choice(places)
-        parent = data
-        for key in path[:-1]:
-            parent = parent[key]
         key, action = path[-1], rng.random()
         try:
+            parent = data
+            for step in path[:-1]:   # an earlier mutation may have replaced a step with a number or a string
+                parent = parent[step]
             if action < 0.15 and isinstance(parent, dict):
                 del parent[key]
             elif action < 0.25 and isinstance(parent, dict):
