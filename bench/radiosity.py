@@ -35,9 +35,11 @@ from cs451 import drawing as D
 #: (scene, patch sizes) for the full and the quick run
 CASES = {False: [("cornell-box", [140.0, 100.0, 70.0, 50.0]), ("room", [0.5, 0.35, 0.25])],
          True: [("cornell-box", [100.0, 50.0]), ("room", [0.5])]}
-#: progressive variants: (label, use_ambient, overshoot)
-VARIANTS = [("progressive", False, 1.0), ("progressive+ambient", True, 1.0),
-            ("progressive+overshoot", False, 1.5), ("progressive+overshoot+ambient", True, 1.5)]
+#: progressive variants: (label, use_ambient, overshoot, order): the notes' sweeps (the student's R3) and the
+#: 1988 paper's "always the current maximum" (bench/shooting_orders.py)
+VARIANTS = [("progressive", False, 1.0, "sweeps"), ("progressive+ambient", True, 1.0, "sweeps"),
+            ("progressive+overshoot", False, 1.5, "sweeps"), ("progressive+overshoot+ambient", True, 1.5, "sweeps"),
+            ("maximum (1988)", False, 1.0, "maximum"), ("maximum (1988)+overshoot", False, 1.5, "maximum")]
 TARGETS = (1e-1, 1e-2, 1e-3)
 #: (scene, patch sizes) shot to 2 × 2 elements each, for the full and the quick run
 SUBSTRUCTURED = {False: [("cornell-box", [100.0, 70.0]), ("room", [0.5])], True: [("cornell-box", [140.0])]}
@@ -108,7 +110,9 @@ def run_case(ref: Any, scene_name: str, patch_size: float, resolution: int) -> d
         S.solve_iterative(method, Fs, a, rho, E, tolerance=1e-5, max_sweeps=500, on_sweep=on_sweep)
         out["methods"][method] = {"curve": curve, "rows": n}
 
-    for label, use_ambient, overshoot in VARIANTS:
+    from bench.shooting_orders import with_maximum_order
+    for label, use_ambient, overshoot, order in VARIANTS:
+        impl = ref if order == "sweeps" else with_maximum_order(ref)
         rows = S.MatrixRows(F)                                  # the same rows, counted as they are first asked for
         checkpoints = set(int(round(x)) for x in np.geomspace(1, 200 * n, 120))
         curve = [(0.0, relative_error(E + (rho * R.call_ambient(ref, a, rho, E) if use_ambient else 0), truth, a, mask), 0)]
@@ -124,12 +128,14 @@ def run_case(ref: Any, scene_name: str, patch_size: float, resolution: int) -> d
             curve.append((t0 - begin - excluded[0] + used * row_seconds, relative_error(shown, truth, a, mask), used))
             excluded[0] += time.perf_counter() - t0
 
-        sol = R.solve_progressive(ref, rows, a, rho, E, tolerance=1e-5, overshoot=overshoot, use_ambient=use_ambient,
+        shot_start = time.perf_counter()
+        sol = R.solve_progressive(impl, rows, a, rho, E, tolerance=1e-5, overshoot=overshoot, use_ambient=use_ambient,
                                   on_shot=on_shot)
+        loop_seconds = time.perf_counter() - shot_start - excluded[0]
         used = rows.counters["rows_computed"]
         end = time.perf_counter() - begin - excluded[0] + used * row_seconds
         curve.append((end, relative_error(sol.display, truth, a, mask), used))
-        out["methods"][label] = {"curve": curve, "rows": used, "shots": sol.steps}
+        out["methods"][label] = {"curve": curve, "rows": used, "shots": sol.steps, "loop_seconds": loop_seconds}
     for m in out["methods"].values():
         for target in TARGETS:
             m[f"seconds_to_{target:g}"], m[f"rows_to_{target:g}"] = first_below(m["curve"], target)
@@ -322,11 +328,13 @@ def _fmt(x: float | None) -> str:
 
 def print_table(results: list[dict]) -> list[str]:
     head = "".join(f"  rows/s to {t:g}".rjust(19) for t in TARGETS)
-    lines = [f"{'scene':<12} {'patches':>7}  {'method':<30}{head}", "-" * (52 + 19 * len(TARGETS))]
+    lines = [f"{'scene':<12} {'patches':>7}  {'method':<30}{head}  {'shots':>7} {'loop s':>7}",
+             "-" * (68 + 19 * len(TARGETS))]
     for case in results:
         for label, m in case["methods"].items():
             cells = "".join(f"{str(m[f'rows_to_{t:g}'] or '—'):>10} /{_fmt(m[f'seconds_to_{t:g}']):>7}" for t in TARGETS)
-            lines.append(f"{case['scene']:<12} {case['patches']:>7}  {label:<30}{cells}")
+            shots = f"{m['shots']:>7} {m['loop_seconds']:>7.2f}" if "shots" in m else f"{'':>7} {'':>7}"
+            lines.append(f"{case['scene']:<12} {case['patches']:>7}  {label:<30}{cells}  {shots}")
         lines.append(f"{'':<21}form factors: {1e3 * case['formfactor_seconds_per_row']:.2f} ms a row charged to every "
                      f"method (all rows batched {case['formfactor_seconds_all_rows_batched']:.2f} s, "
                      f"one row alone {1e3 * case['formfactor_seconds_per_lazy_row']:.2f} ms)")
@@ -370,7 +378,8 @@ def plot(results: list[dict], path: Path) -> None:
                 grid[r][c].axis("off")
     styles = {"direct": ("k", "o"), "jacobi": ("tab:blue", "."), "gauss-seidel": ("tab:green", "."),
               "progressive": ("tab:red", ""), "progressive+ambient": ("tab:orange", ""),
-              "progressive+overshoot": ("tab:purple", ""), "progressive+overshoot+ambient": ("tab:pink", "")}
+              "progressive+overshoot": ("tab:purple", ""), "progressive+overshoot+ambient": ("tab:pink", ""),
+              "maximum (1988)": ("tab:brown", ""), "maximum (1988)+overshoot": ("tab:olive", "")}
     for ax, case in zip(axes, results):
         for label, m in case["methods"].items():
             t = [max(p[0], 1e-3) for p in m["curve"]]

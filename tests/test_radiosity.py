@@ -354,3 +354,61 @@ def test19_every_solver_option_solves_the_same_equations(cornell_rows):
     assert rows.counters["rows_computed"] == len(patches), "the full-matrix solvers reuse the cached rows"
     assert rows.counters["hemicubes_rendered"] == (len(patches) + R.RESAMPLE_BLIND ** 2
                                                    * rows.counters["blind_rows_resampled"])
+
+
+def test_the_papers_order_in_the_bench_converges_to_the_same_answer_as_the_notes_sweeps():
+    """bench/shooting_orders.py (always the current maximum, 1988) against the reference's sweeps (notes §2.5)."""
+    import numpy as np
+
+    from autograder.radiosity.public import SIX
+    from bench.shooting_orders import always_the_maximum
+    from cs451 import KIT_ROOT
+    from cs451.impl import load_impl
+    ref = load_impl(KIT_ROOT / "reference" / "radiosity", "radiosity")
+    F = np.array(SIX["F"])
+    args = (lambda i: F[i], np.array(SIX["areas"]), np.array(SIX["reflectance"]), np.array(SIX["emission"]))
+    B_sweeps, _, sweeps = ref.progressive_refinement(*args, 1e-9, 100_000, 1.0, None)
+    B_max, _, maximum = always_the_maximum(*args, 1e-9, 100_000, 1.0, None)
+    np.testing.assert_allclose(B_max, B_sweeps, rtol=1e-7)
+    assert sweeps[:4] == maximum[:4] and sweeps[4] != maximum[4]   # where the two orders part ways
+    B_direct = np.column_stack([np.linalg.solve(np.eye(len(F)) - args[2][:, c:c + 1] * F, args[3][:, c])
+                                for c in range(3)])
+    np.testing.assert_allclose(B_sweeps, B_direct, rtol=1e-6)
+
+
+def test_rows_ahead_render_the_likely_next_shooters_in_the_same_batch():
+    """A row not rendered yet comes with the rows of the patches with the most unshot energy (RowsAhead)."""
+    import numpy as np
+
+    from cs451.solvers import RowsAhead
+
+    class Source:
+        def __init__(self):
+            self.batches, self.done = [], set()
+
+        def has_row(self, i):
+            return i in self.done
+
+        def rows(self, indices):
+            self.batches.append(list(indices))
+            self.done.update(indices)
+
+        def row(self, i):
+            if i not in self.done:
+                self.rows([i])
+            return np.zeros(6)
+
+    source = Source()
+    areas = np.ones(6)
+    emission = np.zeros((6, 3))
+    emission[4] = 1.0
+    ahead = RowsAhead(source, areas, emission, ahead=2)
+    ahead.row(4)                                  # only patch 4 has unshot energy: nothing to render ahead
+    assert source.batches == [[4]]
+    unshot = np.array([[0.0] * 3, [0.1] * 3, [0.5] * 3, [0.0] * 3, [0.0] * 3, [0.3] * 3])
+    ahead.seen(unshot)
+    ahead.row(2)                                  # then 5 and 1, the largest keys not rendered
+    assert source.batches[-1] == [2, 5, 1]
+    ahead.row(5)                                  # rendered ahead: no new batch
+    assert len(source.batches) == 2
+    assert ahead.counters() == {"rows_ahead": 2, "rows_ahead_unused": 1}

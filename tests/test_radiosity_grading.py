@@ -110,7 +110,10 @@ def test07_bench_writes_its_table_json_and_plot(tmp_path):
     assert (tmp_path / "radiosity.png").stat().st_size > 10_000
     methods = set(report["cases"][0]["methods"])
     assert {"direct", "jacobi", "gauss-seidel", "progressive", "progressive+ambient", "progressive+overshoot",
-            "progressive+overshoot+ambient"} <= methods
+            "progressive+overshoot+ambient", "maximum (1988)", "maximum (1988)+overshoot"} <= methods
+    for case in report["cases"]:                       # the notes' sweeps and the paper's order shoot about as often
+        m = case["methods"]
+        assert 0.5 < m["progressive"]["shots"] / m["maximum (1988)"]["shots"] < 2.0
     for case in report["cases"]:                       # every method gets within 0.1% of the direct solve
         assert all(m["seconds_to_0.001"] is not None for m in case["methods"].values()), case["scene"]
     exact = [f for f in report["furnace"] if f["form_factors"].startswith("exact")]

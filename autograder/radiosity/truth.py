@@ -121,21 +121,28 @@ def shoot_by_hand(i: int, F, areas, reflectance, radiosity, unshot) -> tuple[lis
 
 def progressive_by_hand(F, areas, reflectance, emission, tolerance: float, max_shots: int,
                         overshoot: float = 1.0) -> tuple[np.ndarray, np.ndarray, list[int]]:
-    """The shooting loop with a linear search for the largest |ΔB|·A (ties to the lower index)."""
+    """The notes' shooting loop (§2.5) with a sort for each sweep's order (keys at its start; ties to the lower index)."""
     B = [list(map(float, r)) for r in emission]
     dB = [list(map(float, r)) for r in emission]
     emitted = sum(sum(e) * a for e, a in zip(emission, areas))
     order: list[int] = []
-    while len(order) < max_shots:
-        keys = [sum(abs(x) for x in dB[j]) * areas[j] for j in range(len(areas))]
-        if sum(keys) <= tolerance * emitted:
+
+    def keys() -> list[float]:
+        return [sum(abs(x) for x in dB[j]) * areas[j] for j in range(len(areas))]
+
+    while True:
+        start = keys()
+        sweep = sorted((j for j in range(len(areas)) if start[j] > 0), key=lambda j: (-start[j], j))
+        if not sweep:
             break
-        i = max(range(len(keys)), key=lambda j: (keys[j], -j))
-        left = [(1 - overshoot) * x for x in dB[i]]
-        dB[i] = [overshoot * x for x in dB[i]]
-        B, dB = shoot_by_hand(i, F, areas, reflectance, B, dB)
-        dB[i] = left
-        order.append(i)
+        for i in sweep:
+            if len(order) >= max_shots or sum(keys()) <= tolerance * emitted:
+                return np.array(B), np.array(dB), order
+            left = [(1 - overshoot) * x for x in dB[i]]
+            dB[i] = [overshoot * x for x in dB[i]]
+            B, dB = shoot_by_hand(i, F, areas, reflectance, B, dB)
+            dB[i] = left
+            order.append(i)
     return np.array(B), np.array(dB), order
 
 

@@ -112,6 +112,10 @@ class HemicubeFormFactors:
         """Row F_i· (n,): computed on first request, then cached."""
         return self.rows([i])[0]
 
+    def has_row(self, i: int) -> bool:
+        """Whether row i is rendered already (asking for it costs nothing)."""
+        return int(i) in self._rows
+
     def rows(self, indices: Iterable[int]) -> np.ndarray:
         """Rows (k, n) for ``indices``; the missing ones are rendered in batches (many hemicubes per read-back)."""
         idx = [int(i) for i in indices]

@@ -44,6 +44,9 @@ TASKS = (
 )
 
 SOLVERS = ("progressive", "jacobi", "gauss-seidel", "direct")
+#: hemicubes per read-back while shooting: a row asked for is rendered with the rows of the next likely shooters
+#: (:class:`cs451.solvers.RowsAhead`); measured in ``cs451 bench radiosity`` (rows ahead, and those never used)
+ROWS_PER_BATCH = 16
 #: a patch blind from its centre (under a block resting on it) shoots from the seeing part of a 3 × 3 grid over it
 RESAMPLE_BLIND = 3
 
@@ -151,8 +154,8 @@ def solve(patches: Patches, impl: Any, opts: RadiosityOptions, rows: Any = None,
     """Solve with the chosen solver; rows from the hemicube engine unless given."""
     if rows is None:
         rows = hemicube_formfactors(patches.quads, opts.resolution, opts.proximity,
-                                    batch=1 if opts.solver == "progressive" else 256)
-    return solvers.solve(patches, calls(impl), opts, rows, on_shot)
+                                    batch=ROWS_PER_BATCH if opts.solver == "progressive" else 256)
+    return solvers.solve(patches, calls(impl), opts, rows, on_shot, rows_ahead=ROWS_PER_BATCH - 1)
 
 
 def camera_view(scene: Scene) -> np.ndarray:

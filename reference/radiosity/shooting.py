@@ -1,4 +1,4 @@
-"""R2-R4: progressive refinement radiosity (Cohen, Chen, Wallace & Greenberg 1988).
+"""R2-R4: progressive refinement radiosity (Cohen, Chen, Wallace & Greenberg 1988), as notes §2.5 write it.
 
 Every array has one row per patch and, for colours, three columns (red, green, blue):
 areas (n,), reflectance (n, 3) in [0, 1], emission (n, 3), radiosity and unshot radiosity (n, 3).
@@ -34,14 +34,16 @@ def shoot(i: int, row: np.ndarray, areas: np.ndarray, reflectance: np.ndarray,
 def progressive_refinement(row: Callable[[int], np.ndarray], areas: np.ndarray, reflectance: np.ndarray,
                            emission: np.ndarray, tolerance: float, max_shots: int, overshoot: float,
                            on_shot: Callable | None) -> tuple:
-    """Solve for the radiosities by shooting, always from the patch with the most unshot energy.
+    """Solve for the radiosities by shooting, in sweeps ordered by a max-heap, as the course notes write it (§2.5).
 
-    Start with B = ΔB = E. Repeatedly pick the patch i with the largest unshot energy, its key
-    ``(|ΔB_i,r| + |ΔB_i,g| + |ΔB_i,b|)·A_i`` (channels summed, then times the area; ties go to the
-    lower index), using a max-heap built with :mod:`heapq`, fetch its form factors with ``row(i)``
-    and shoot (R2). Before every shot, stop when the total unshot energy (the keys' sum) is at most
-    ``tolerance`` times the total emitted energy ``Σ_j (E_j,r + E_j,g + E_j,b)·A_j``, or when
-    ``max_shots`` shots are done.
+    Start with B = ΔB = E. Each sweep (one "Gauss-Seidel iteration" of the notes) builds a max-heap
+    with :mod:`heapq` of every patch whose key ``(|ΔB_i,r| + |ΔB_i,g| + |ΔB_i,b|)·A_i`` (channels
+    summed, then times the area) is above 0, keyed as the sweep starts (ties go to the lower index),
+    then pops the patches in that order; each fetches its form factors with ``row(i)`` and shoots
+    its current ΔB (R2). A patch lit for the first time during a sweep waits for the next one.
+    Before every shot, stop when the total unshot energy (the keys' sum) is at most ``tolerance``
+    times the total emitted energy ``Σ_j (E_j,r + E_j,g + E_j,b)·A_j``, or when ``max_shots`` shots
+    are done; stop too when a sweep would be empty.
 
     ``overshoot`` ω (1 = plain shooting) shoots ω·ΔB_i instead and leaves ΔB_i = (1 − ω)·ΔB_i.
     If ``on_shot`` is not None, call ``on_shot(shots, i, radiosity, unshot)`` after every shot:
@@ -49,38 +51,36 @@ def progressive_refinement(row: Callable[[int], np.ndarray], areas: np.ndarray, 
 
     Returns ``(radiosity, unshot, order)``: B (n, 3), ΔB (n, 3) and the patches shot, in order (list of int).
     """
-    # BEGIN SOLUTION R3: a heap of (-key, index) with stale entries skipped; shoot until the unshot energy is small (handout §R3)
+    # BEGIN SOLUTION R3: a heap of (-key, index) built at each sweep's start; pop it to the end, shooting (handout §R3)
     areas = np.asarray(areas, dtype=np.float64)
     radiosity = np.array(emission, dtype=np.float64)
     unshot = radiosity.copy()
     key = np.abs(unshot).sum(axis=1) * areas
     total_emitted = float((np.asarray(emission).sum(axis=1) * areas).sum())
-    heap = [(-key[j], j) for j in np.flatnonzero(key > 0).tolist()]
-    heapq.heapify(heap)
     reflects = reflectance.max(axis=1) > 0          # patches of zero albedo never receive anything
     order: list[int] = []
-    while len(order) < max_shots and key.sum() > tolerance * total_emitted:
-        neg, i = heapq.heappop(heap)
-        if -neg != key[i] or key[i] == 0.0:
-            continue                                # stale entry: the patch's key changed since
-        amount = overshoot * unshot[i]
-        left = unshot[i] - amount
-        unshot[i] = amount
-        f = row(i)
-        radiosity, unshot = shoot(i, f, areas, reflectance, radiosity, unshot)
-        unshot[i] = left
-        order.append(i)
-        changed = reflects & (f != 0)
-        changed[i] = True
-        idx = np.flatnonzero(changed)
-        key[idx] = np.abs(unshot[idx]).sum(axis=1) * areas[idx]
-        for j in idx[key[idx] > 0].tolist():
-            heapq.heappush(heap, (-key[j], j))
-        if len(heap) > 4 * len(key) + 16:           # drop stale entries now and then
-            heap = [(-key[j], j) for j in np.flatnonzero(key > 0).tolist()]
-            heapq.heapify(heap)
-        if on_shot is not None:
-            on_shot(len(order), i, radiosity, unshot)
+    while True:
+        heap = [(-key[j], j) for j in np.flatnonzero(key > 0).tolist()]
+        if not heap:
+            break
+        heapq.heapify(heap)
+        while heap:
+            if len(order) >= max_shots or key.sum() <= tolerance * total_emitted:
+                return radiosity, unshot, order
+            _, i = heapq.heappop(heap)
+            amount = overshoot * unshot[i]
+            left = unshot[i] - amount
+            unshot[i] = amount
+            f = row(i)
+            radiosity, unshot = shoot(i, f, areas, reflectance, radiosity, unshot)
+            unshot[i] = left
+            order.append(i)
+            changed = reflects & (f != 0)
+            changed[i] = True
+            idx = np.flatnonzero(changed)
+            key[idx] = np.abs(unshot[idx]).sum(axis=1) * areas[idx]
+            if on_shot is not None:
+                on_shot(len(order), i, radiosity, unshot)
     return radiosity, unshot, order
     # END SOLUTION
 
