@@ -153,11 +153,11 @@ def run_substructured(ref: Any, scene_name: str, patch_size: float, resolution: 
     system (the answer the full-matrix methods give), with the same price per row.
     """
     from cs451.patches import patch_areas
-    from bench import substructuring as S
+    from bench import substructuring as sub
 
     scene = load_scene(scene_name)
     patches = R.make_patches(scene, ref, patch_size)
-    elements, parent = S.split_patches(patches.quads, k)
+    elements, parent = sub.split_patches(patches.quads, k)
     a = patch_areas(elements)
     rho, E = patches.reflectance[parent], patches.emission[parent]
     mask = E.max(axis=1) == 0
@@ -167,7 +167,7 @@ def run_substructured(ref: Any, scene_name: str, patch_size: float, resolution: 
     row_seconds = (time.perf_counter() - start) / len(elements)
     truth = S.solve_direct(S.shooting_matrix(F, a), rho, E)
     # every patch row rendered up front, so that the solve's clock holds the shooting alone; rows are charged per shooter
-    rows = S.MatrixRows(S.PatchToElementRows(engine, patches.quads, parent).matrix())
+    rows = S.MatrixRows(sub.PatchToElementRows(engine, patches.quads, parent).matrix())
     curves: dict[str, list] = {}
     for label, use_ambient in (("substructured", False), ("substructured+ambient", True)):
         curve: list[tuple[float, float, int]] = []
@@ -183,7 +183,7 @@ def run_substructured(ref: Any, scene_name: str, patch_size: float, resolution: 
                           relative_error(shown, truth, a, mask), len(shooters)))
             excluded[0] += time.perf_counter() - t0
 
-        S.solve_substructured(rows, parent, a, rho, E, tolerance=1e-5, on_shot=on_shot)
+        sub.solve_substructured(rows, parent, a, rho, E, tolerance=1e-5, on_shot=on_shot)
         curves[label] = curve
     out: dict[str, Any] = {"scene": scene_name, "patch_size": patch_size, "patches": len(patches),
                            "elements": len(elements), "resolution": resolution, "row_seconds": row_seconds,

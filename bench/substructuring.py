@@ -91,8 +91,9 @@ def solve_substructured(rows: Any, parent: np.ndarray, element_areas: np.ndarray
                         ) -> SubstructuredSolution:
     """Progressive refinement with patches shooting to elements.
 
-    A patch's unshot energy is the sum of its elements' (ΔB_e·A_e). The patch with the most
-    shoots its mean unshot radiosity ΔB_p: every element e receives ρ_e·ΔB_p·F_pe·A_p/A_e, into
+    A patch's unshot energy is the sum of its elements' (ΔB_e·A_e). Patches shoot in sweeps, as in the
+    notes' progressive radiosity (§2.5): each sweep in the order of the patches' energies as it starts, the
+    most first. A patch shoots its mean unshot radiosity ΔB_p: every element e receives ρ_e·ΔB_p·F_pe·A_p/A_e, into
     B_e and ΔB_e; the shooter's elements' ΔB become 0. Stops when the unshot energy is at most
     ``tolerance`` of the emitted energy, or after ``max_shots``.
     """
@@ -108,19 +109,31 @@ def solve_substructured(rows: Any, parent: np.ndarray, element_areas: np.ndarray
     energy = np.stack([np.bincount(parent, weights=dB[:, c] * a, minlength=n_patches) for c in range(3)], axis=1)
     order: list[int] = []
     start = time.perf_counter()
-    while len(order) < max_shots and np.abs(energy).sum() > tolerance * emitted:
-        p = int(np.argmax(np.abs(energy).sum(axis=1)))
+    def shoot(p: int) -> None:
         shot = energy[p] / patch_area[p]
         dB[members[p]] = 0.0
         energy[p] = 0.0
         received = reflectance * (rows.row(p) * (patch_area[p] / a))[:, None] * shot[None, :]
-        B += received
-        dB += received
+        B[...] += received                          # in place: the sweeps' loop below holds these arrays
+        dB[...] += received
         for c in range(3):                          # the elements' new unshot energy, summed per patch
             energy[:, c] += np.bincount(parent, weights=received[:, c] * a, minlength=n_patches)
         order.append(p)
         if on_shot is not None:
             on_shot(len(order), p, B, dB)
+
+    while True:                                     # sweeps, as the notes' (and the student's R3) shoot
+        key = np.abs(energy).sum(axis=1)
+        sweep = [int(p) for p in np.argsort(-key, kind="stable") if key[p] > 0]   # ties to the lower index
+        if not sweep:
+            break
+        for p in sweep:
+            if len(order) >= max_shots or np.abs(energy).sum() <= tolerance * emitted:
+                break
+            shoot(p)
+        else:
+            continue
+        break
     residual = float(np.abs(energy).sum() / emitted) if emitted > 0 else 0.0
     return SubstructuredSolution(B, dB, residual <= tolerance * (1 + 1e-9), residual, len(order),
                                  time.perf_counter() - start, order)

@@ -213,14 +213,14 @@ def test10_rows_only_for_shooters_and_none_for_a_new_light_colour():
     scene = cornell()
     patches = R.make_patches(scene, REF, 140.0)
     rows = R.hemicube_formfactors(patches.quads, 32)
-    first = R.solve_progressive(REF, rows, patches.areas, patches.reflectance, patches.emission, 1e-2)
+    first = R.solve_progressive(REF, rows, patches.areas, patches.reflectance, patches.emission, 0.2)
     c = first.counters
     assert c["rows_computed"] == c["distinct_shooters"] == len(set(first.order)) < len(patches)
     # one hemicube a row, and k × k more for a row blind from its patch's centre (under a block)
     assert c["hemicubes_rendered"] == c["rows_computed"] + R.RESAMPLE_BLIND ** 2 * c["blind_rows_resampled"]
     rendered = rows.counters["hemicubes_rendered"]
     bluer = patches.emission * np.array([0.2, 0.5, 3.0])            # a new light colour: same geometry
-    second = R.solve_progressive(REF, rows, patches.areas, patches.reflectance * 0.9, bluer, 1e-2)
+    second = R.solve_progressive(REF, rows, patches.areas, patches.reflectance * 0.9, bluer, 0.2)
     assert rows.counters["hemicubes_rendered"] == rendered, "re-solving with new colours rendered hemicubes"
     assert second.radiosity[:, 2].sum() > first.radiosity[:, 2].sum()
 

@@ -44,7 +44,7 @@ def demo(module: Any, output: Path, window: bool, frames: int | None, scene_name
     a, rho = patches.areas, patches.reflectance
     win = Window(2 * width, height, "cs451 radiosity: B | B + ambient (q quits)") if window else None
     drawer = GouraudDrawer(win.ctx if win else None)
-    rows = R.hemicube_formfactors(patches.quads, opts.resolution, opts.proximity, ctx=drawer.ctx, batch=1)
+    rows = R.hemicube_formfactors(patches.quads, opts.resolution, opts.proximity, ctx=drawer.ctx, batch=R.ROWS_PER_BATCH)
     encoding = (scene.image.exposure, scene.image.srgb)
     pictures: list[np.ndarray] = []
     captions: list[str] = []
@@ -74,7 +74,8 @@ def demo(module: Any, output: Path, window: bool, frames: int | None, scene_name
     try:
         show(0, patches.emission.copy(), patches.emission.copy())
         sol = R.solve_progressive(module, rows, a, rho, patches.emission, opts.tolerance, opts.max_shots, opts.overshoot,
-                                  True, lambda shots, i, B, dB: show(shots, B, dB) if shots in wanted else None)
+                                  True, lambda shots, i, B, dB: show(shots, B, dB) if shots in wanted else None,
+                                  rows_ahead=R.ROWS_PER_BATCH - 1)
         if win is None:
             show(len(sol.order), sol.radiosity, sol.unshot, last=True)
         else:                                       # the answer stays up until the window is closed
