@@ -7,6 +7,7 @@ the hemicube engine, or :class:`MatrixRows` over a given matrix.
 """
 from __future__ import annotations
 
+import itertools
 import time
 from dataclasses import dataclass, field as dc_field
 from typing import Any, Callable, Literal
@@ -109,10 +110,11 @@ class RowsAhead:
         self.asked.add(i)
         if self.can_batch and not self.source.has_row(i):
             key = np.abs(self.unshot).sum(axis=1) * self.areas
-            likely = [int(j) for j in np.argsort(-key, kind="stable")
-                      if key[j] > 0 and j != i and not self.source.has_row(int(j))][:self.ahead]
-            self.source.rows([i, *likely])
+            order = np.argsort(-key, kind="stable")
+            likely = list(itertools.islice((int(j) for j in order[key[order] > 0]
+                                            if j != i and not self.source.has_row(int(j))), self.ahead))
             self.rendered_ahead.update(likely)
+            return self.source.rows([i, *likely])[0]   # row i from the batch: not counted again as a cache hit
         return self.source.row(i)
 
     def counters(self) -> dict[str, int]:

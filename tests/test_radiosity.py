@@ -389,9 +389,10 @@ def test_rows_ahead_render_the_likely_next_shooters_in_the_same_batch():
         def has_row(self, i):
             return i in self.done
 
-        def rows(self, indices):
+        def rows(self, indices):                  # as the hemicube engine's: the rows (k, n) of the indices
             self.batches.append(list(indices))
             self.done.update(indices)
+            return np.zeros((len(indices), 6))
 
         def row(self, i):
             if i not in self.done:
