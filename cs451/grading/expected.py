@@ -13,6 +13,7 @@ import hashlib
 import json
 import os
 import sys
+import threading
 from pathlib import Path
 from typing import Any
 
@@ -70,9 +71,14 @@ def _load(path: Path) -> Outputs:
 
 
 def _store(path: Path, arrays: Outputs) -> None:
-    tmp = path.with_suffix(".tmp.npz")
-    np.savez(tmp, **arrays)
-    os.replace(tmp, path)
+    """Write atomically, through a temporary file of this process's own: the workers of a roster may compute and
+    store the same answer at once, and a shared temporary name let one move the other's half-written file."""
+    tmp = path.with_name(f"{path.stem}.{os.getpid()}.{threading.get_ident()}.tmp.npz")
+    try:
+        np.savez(tmp, **arrays)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
 
 
 class ReferenceAnswers:
