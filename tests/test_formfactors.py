@@ -148,6 +148,24 @@ def test11_batching_does_not_change_rows(ref):
     assert np.array_equal(a, b)
 
 
+def test11a_culled_faces_give_the_same_item_buffers_and_rows(ref):
+    """Drawing each face with only the patches that can land in it (radiosity's engine) changes nothing drawn."""
+    scene = load_scene("cs451/scenes/cornell-box.json")
+    quads, _, _ = scene_polygons(scene)
+    q = subdivide_uniform(quads, 3)[0]
+    picks = list(range(0, len(q), 7))
+    out = {}
+    for cull in (False, True):
+        ff = HemicubeFormFactors(q, calls(ref), resolution=32, batch=8, cull=cull, resample_blind=2)
+        out[cull] = (*ff.item_buffers(picks), ff.rows(picks), dict(ff.renderer.triangles), dict(ff.counters))
+    for k in range(3):
+        assert np.array_equal(out[False][k], out[True][k])
+    assert out[False][4] == out[True][4]                       # the same counters (culled, back-facing, blind rows)
+    plain, culled = out[False][3], out[True][3]
+    assert plain["drawn"] == plain["scene_per_face"] == culled["scene_per_face"]
+    assert culled["drawn"] < 0.4 * plain["drawn"]              # a face draws a small part of the scene
+
+
 def test11b_new_colours_reuse_every_row(ref):
     import json
 

@@ -30,21 +30,25 @@ _VERTEX_ENGINE = """
 #undef main
 uniform sampler2D u_faces;          // per instance (shooter × face): 4 columns of the view, the tile rectangle, the base plane
 uniform mat4 u_projections[2];      // top, side
+uniform int u_face_base;            // the first face of this draw: 0 for one instanced draw, the face for one draw a face
 out float gl_ClipDistance[5];
+int hemicube_face() { return u_face_base + gl_InstanceID; }
 mat4 hemicube_view() {
-    return mat4(texelFetch(u_faces, ivec2(0, gl_InstanceID), 0), texelFetch(u_faces, ivec2(1, gl_InstanceID), 0),
-                texelFetch(u_faces, ivec2(2, gl_InstanceID), 0), texelFetch(u_faces, ivec2(3, gl_InstanceID), 0));
+    int f = hemicube_face();
+    return mat4(texelFetch(u_faces, ivec2(0, f), 0), texelFetch(u_faces, ivec2(1, f), 0),
+                texelFetch(u_faces, ivec2(2, f), 0), texelFetch(u_faces, ivec2(3, f), 0));
 }
-mat4 hemicube_projection() { return u_projections[(gl_InstanceID % 5) == 0 ? 0 : 1]; }
+mat4 hemicube_projection() { return u_projections[(hemicube_face() % 5) == 0 ? 0 : 1]; }
 void main() {
     item_main();
     vec4 c = gl_Position;
-    vec4 rect = texelFetch(u_faces, ivec2(4, gl_InstanceID), 0);   // x0, y0, x1, y1 in the atlas's NDC
+    int f = hemicube_face();
+    vec4 rect = texelFetch(u_faces, ivec2(4, f), 0);   // x0, y0, x1, y1 in the atlas's NDC
     gl_ClipDistance[0] = c.w + c.x;
     gl_ClipDistance[1] = c.w - c.x;
     gl_ClipDistance[2] = c.w + c.y;
     gl_ClipDistance[3] = c.w - c.y;
-    vec4 plane = texelFetch(u_faces, ivec2(5, gl_InstanceID), 0);  // the shooter's plane, raised by a hair
+    vec4 plane = texelFetch(u_faces, ivec2(5, f), 0);  // the shooter's plane, raised by a hair
     gl_ClipDistance[4] = dot(plane.xyz, in_position) - plane.w;      // nothing in or behind the base plane is drawn
     vec2 scale = 0.5 * (rect.zw - rect.xy);
     vec2 offset = 0.5 * (rect.zw + rect.xy);
@@ -55,10 +59,19 @@ MAX_ATLAS = 4096      # pixels on a side of the item-buffer atlas
 
 
 class ItemBufferRenderer:
-    """The scene's triangles on the GPU, and one instanced draw of a batch of hemicubes into an R32UI atlas."""
+    """The scene's triangles on the GPU, and a batch of hemicubes drawn into an R32UI atlas, read back once.
+
+    ``cull``: each face is drawn on its own, with only the patches whose bounding spheres reach into its
+    frustum (and above the shooter's plane), tested on the CPU against the planes of projection · view;
+    otherwise every face is one instance of a single draw of the whole scene. A face sees a fifth of what
+    lies in front of the shooter at most, so culling draws a small part of the triangles for the same
+    item buffers: what is culled lies wholly outside the clip volume, where the GPU would discard it.
+    That holds for shaders that place vertices with ``hemicube_projection() * hemicube_view()``, as the
+    reference's do; a submission's shaders (stage 3) are drawn unculled, so they are judged on what they draw.
+    """
 
     def __init__(self, quads: np.ndarray, shaders: tuple[str, str], resolution: int, projections: np.ndarray,
-                 batch: int, ctx: Any = None):
+                 batch: int, ctx: Any = None, cull: bool = False):
         from ..gl import compile_program, create_context
         self.resolution = r = int(resolution)
         self.ctx = ctx = ctx or create_context()
@@ -69,6 +82,7 @@ class ItemBufferRenderer:
         self.program = compile_program(ctx, "H4", (VERTEX_INTERFACE + "#define main item_main\n", vs, _VERTEX_ENGINE),
                                        (FRAGMENT_INTERFACE, fs, ""))
         tris, ids = patch_triangles(quads)
+        self.n_triangles = len(tris)
         self.origin = quads.reshape(-1, 3).mean(axis=0)   # draw relative to the scene's middle: float32 keeps precision
         positions = (tris - self.origin).astype("f4").reshape(-1, 3)
         vbo = ctx.buffer(positions.tobytes())
@@ -79,7 +93,18 @@ class ItemBufferRenderer:
         if not attrs:
             raise KitError("H4: the vertex shader uses neither in_position nor in_id")
         self.vao = ctx.vertex_array(self.program, attrs)
+        self.cull = bool(cull)
+        if self.cull:
+            self.indices = ctx.buffer(reserve=4 * 6 * len(quads))      # grows to what a batch's faces draw
+            self.vao_culled = ctx.vertex_array(self.program, attrs, index_buffer=self.indices, index_element_size=4)
+            self.centers = quads.mean(axis=1)
+            self.radii = np.linalg.norm(quads - self.centers[:, None, :], axis=2).max(axis=1)
+        #: triangles drawn and triangles a draw of the whole scene per face would have drawn (culling's saving)
+        self.triangles = {"drawn": 0, "scene_per_face": 0}
+        if "u_face_base" in self.program:
+            self.program["u_face_base"].value = 0
         proj = np.asarray(projections, dtype=np.float64)
+        self.projections = proj
         if "u_projections" in self.program:
             self.program["u_projections"].write(np.ascontiguousarray(proj.transpose(0, 2, 1)).astype("f4").tobytes())
         # atlas: each hemicube is a tile r wide and 3r high (top r×r, then four sides r/2 high)
@@ -108,6 +133,39 @@ class ItemBufferRenderer:
             for f, (a, b_, c, d) in enumerate(boxes):
                 out[b, f] = (2 * a / W - 1, 2 * b_ / Hh - 1, 2 * c / W - 1, 2 * d / Hh - 1)
         return out.reshape(-1, 4)
+
+    def visible_patches(self, views: np.ndarray, normals: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+        """(B·5, n) bool: whether patch j's bounding sphere reaches into face f's clip volume and above its
+        shooter's base plane (n·x > offset). A patch outside one of those half-spaces draws nothing there."""
+        count = len(views)
+        kinds = np.where(np.arange(5) == 0, 0, 1)                                  # top, then four sides
+        clip = (self.projections[kinds][None] @ views).reshape(-1, 4, 4)           # world to clip, per face
+        w = clip[:, 3:4, :]
+        planes = np.concatenate([w + clip[:, :3, :], w - clip[:, :3, :]], axis=1)   # -w <= x, y, z <= w
+        norms = np.maximum(np.linalg.norm(planes[:, :, :3], axis=2), 1e-300)
+        dist = (planes[:, :, :3] @ self.centers.T + planes[:, :, 3:]) / norms[:, :, None]
+        inside = (dist > -self.radii).all(axis=1)
+        above = normals @ self.centers.T - offsets[:, None] > -self.radii            # (B, n)
+        return inside & np.repeat(above, 5, axis=0)[: count * 5]
+
+    def _draw_culled(self, views: np.ndarray, normals: np.ndarray, offsets: np.ndarray) -> None:
+        """One draw per face of a batch, of the patches that can land in it (:meth:`visible_patches`)."""
+        visible = self.visible_patches(views, normals, offsets)
+        counts = visible.sum(axis=1)
+        patches = np.flatnonzero(visible) % visible.shape[1]                        # face-major, ascending per face
+        indices = (6 * patches[:, None] + np.arange(6)).astype("u4").ravel()
+        if indices.nbytes > self.indices.size:
+            self.indices.orphan(indices.nbytes)
+        if len(indices):
+            self.indices.write(indices.tobytes())
+        first = 0
+        for f, k in enumerate(counts):
+            if k:
+                self.program["u_face_base"].value = f
+                self.vao_culled.render(vertices=6 * int(k), first=first)
+                first += 6 * int(k)
+        self.program["u_face_base"].value = 0
+        self.triangles["drawn"] += 2 * int(counts.sum())
 
     def render(self, views: np.ndarray, planes: np.ndarray | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
         """Item buffers of a batch in this renderer's own GL context, whichever context was made current since."""
@@ -152,7 +210,13 @@ class ItemBufferRenderer:
         used_rows = -(-count // self.cols)
         h = used_rows * 3 * r
         self.fbo.clear(0, 0, 0, 0, depth=1.0, viewport=(0, 0, self.size[0], h))
-        self.vao.render(instances=count * 5)
+        triangles = self.n_triangles
+        self.triangles["scene_per_face"] += count * 5 * triangles
+        if self.cull:
+            self._draw_culled(views, planes[:, :3], planes[:, 3] + self.plane_eps)
+        else:
+            self.vao.render(instances=count * 5)
+            self.triangles["drawn"] += count * 5 * triangles
         raw = self.fbo.read(viewport=(0, 0, self.size[0], h), components=1, dtype="u4")
         atlas = np.frombuffer(raw, dtype=np.uint32).reshape(h, self.size[0])
         out = []

@@ -44,7 +44,8 @@ class HemicubeFormFactors:
     centres of k × k sub-quads, and the rows of those that see are averaged by area. A patch
     whose centre lies under a box resting on it (a floor patch straddling a block's footprint)
     is lit on its exposed part, and that part must shoot its light; from the centre alone the
-    light would vanish.
+    light would vanish. ``cull`` draws each hemicube face with only the patches that can land in it
+    (:class:`~.atlas.ItemBufferRenderer`): the same rows, for trusted shaders only.
 
     ``counters``: hemicubes_rendered (k² per row with a split shooter), rows_computed,
     rows_cached_hits (rows asked for again), patches_culled (summed over rows: patches wholly
@@ -56,7 +57,7 @@ class HemicubeFormFactors:
 
     def __init__(self, quads: Any, calls: StageCalls, resolution: int = 128, near: float | None = None, rotate: bool = True,
                  seed: int = 0, proximity: str = "contour", batch: int = 256, proximity_distance: float = 2.0,
-                 shooter_split: int = 1, resample_blind: int = 0, ctx: Any = None):
+                 shooter_split: int = 1, resample_blind: int = 0, ctx: Any = None, cull: bool = False):
         self.quads = as_quads(quads)
         if len(self.quads) == 0:
             raise KitError("no patches")
@@ -85,6 +86,7 @@ class HemicubeFormFactors:
             raise KitError(f"near plane must lie in (0, {self.far:g}), got {self.near}")
         self._batch_request = max(1, min(int(batch), self.n))   # no bigger an atlas than the scene needs
         self._ctx = ctx
+        self.cull = bool(cull)
         self._renderer: ItemBufferRenderer | None = None
         self._tables: tuple[np.ndarray, np.ndarray] | None = None
         self._rows: dict[int, np.ndarray] = {}
@@ -104,7 +106,7 @@ class HemicubeFormFactors:
         if self._renderer is None:
             projections = self.calls.projections(self.near, self.far)
             self._renderer = ItemBufferRenderer(self.quads, self.calls.shaders(), self.resolution, projections,
-                                                self._batch_request, self._ctx)
+                                                self._batch_request, self._ctx, cull=self.cull)
         return self._renderer
 
     # -- rows --------------------------------------------------------------------
@@ -233,8 +235,8 @@ class HemicubeFormFactors:
                     if row is not None:
                         rows[k] = row
         t2 = time.perf_counter()
+        self._count_culled(batch)
         for k, i in enumerate(batch):
-            self._count_culled(i)
             self._rows[i] = self._proximity_fix(i, rows[k]) if self.proximity == "contour" else rows[k]
             self.counters["rows_computed"] += 1
         self.seconds["proximity"] += time.perf_counter() - t2
@@ -257,12 +259,15 @@ class HemicubeFormFactors:
         self.counters["blind_rows_resampled"] += len(patches)
         return out
 
-    def _count_culled(self, i: int) -> None:
-        heights = (self.quads - self.centers[i]) @ self.normals[i]                  # (n, 4)
-        behind = heights.max(axis=1) <= 1e-9 * max(self.radii[i], 1e-300)
-        behind[i] = False                                                          # not the shooter itself
+    def _count_culled(self, batch: list[int]) -> None:
+        """Count, for the shooters ``batch``, the patches wholly behind their planes and those facing away."""
+        b = np.asarray(batch)
+        n_c = np.einsum("bd,bd->b", self.normals[b], self.centers[b])                      # (B,)
+        top = (self.quads @ self.normals[b].T).max(axis=1).T - n_c[:, None]              # (B, n): highest corner
+        behind = top <= 1e-9 * np.maximum(self.radii[b], 1e-300)[:, None]
+        behind[np.arange(len(b)), b] = False                                             # not the shooter itself
         self.counters["patches_culled"] += int(behind.sum())
-        facing_away = ((self.centers - self.centers[i]) * self.normals).sum(axis=1) >= 0
+        facing_away = np.einsum("bjd,jd->bj", self.centers[None, :, :] - self.centers[b][:, None, :], self.normals) >= 0
         self.counters["patches_backfacing"] += int((facing_away & ~behind).sum())
 
     def close_patches(self, i: int) -> np.ndarray:

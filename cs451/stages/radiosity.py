@@ -186,8 +186,9 @@ def hemicube_formfactors(quads: np.ndarray, resolution: int = 128, proximity: st
     from . import hemicube as H
 
     return HemicubeFormFactors(quads, H.calls(STAGE.trusted("hemicube")), resolution=resolution, proximity=proximity, ctx=ctx,
-                               batch=batch, seed=seed, resample_blind=RESAMPLE_BLIND)
+                               batch=batch, seed=seed, resample_blind=RESAMPLE_BLIND, cull=True)
 
+    Faces are drawn culled (only the patches that can land in each): the shaders are the trusted reference's.
 
 @contextlib.contextmanager
 def shooting_progress(patches: Patches, opts: RadiosityOptions) -> Iterator[Callable | None]:

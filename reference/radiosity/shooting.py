@@ -24,8 +24,8 @@ def shoot(i: int, row: np.ndarray, areas: np.ndarray, reflectance: np.ndarray,
     # BEGIN SOLUTION R2: ΔRad_j = ρ_j ΔB_i F_ij A_i / A_j into B and ΔB, then ΔB_i = 0 (handout §R2)
     delta = unshot[i].copy()
     received = reflectance * (row * (areas[i] / areas))[:, None] * delta[None, :]
-    radiosity = radiosity + received
-    unshot = unshot + received
+    radiosity += received                    # in place: a solve shoots thousands of times
+    unshot += received
     unshot[i] = 0.0
     return radiosity, unshot
     # END SOLUTION
