@@ -17,6 +17,7 @@ without it).
 """
 from __future__ import annotations
 
+import functools
 import json
 import math
 import time
@@ -203,19 +204,24 @@ WALLS = {"floor": [0], "ceiling": [1], "back": [2], "left (red)": [4], "right (g
          "short block": [5, 6, 7, 8, 9], "tall block": [10, 11, 12, 13, 14]}
 
 
-def polygon_ids(scene: Any, size: tuple[int, int]) -> np.ndarray:
-    """Which polygon each pixel shows (-1: none), drawn with the kit's Gouraud drawer from the scene camera."""
-    quads, _, _, _ = P.scene_polygons(scene)
+def polygon_ids(scene: Any, size: tuple[int, int], quads: np.ndarray | None = None, drawer: Any = None) -> np.ndarray:
+    """Which polygon (or which of ``quads``) each pixel shows (-1: none), drawn with the kit's Gouraud drawer from the scene camera."""
+    if quads is None:
+        quads, _, _, _ = P.scene_polygons(scene)
+    if drawer is not None:
+        from cs451.gl import make_current
+        make_current(drawer.ctx)                   # other engines may have made their context current
     ids = np.arange(len(quads), dtype=np.float64)
     positions = quads.reshape(-1, 3)
     colors = np.repeat(np.column_stack([ids + 1, np.zeros((len(ids), 2))]), 4, axis=0)
     corners = np.arange(4 * len(quads)).reshape(-1, 4)
-    image = D.GouraudDrawer().draw(positions, colors, corners, D.camera_matrix(scene, *size, R.camera_view(scene)), *size)
+    image = (drawer or D.GouraudDrawer()).draw(positions, colors, corners,
+                                               D.camera_matrix(scene, *size, R.camera_view(scene)), *size)
     return np.round(image[..., 0]).astype(int) - 1
 
 
-def mitsuba_cornell(scene: Any, size: tuple[int, int], spp: int, max_depth: int) -> np.ndarray:
-    """The scene rendered by Mitsuba 3's path tracer (scalar_rgb), linear radiance (h, w, 3)."""
+def mitsuba_cornell(scene: Any, size: tuple[int, int], spp: int, max_depth: int, seed: int = 0) -> np.ndarray:
+    """The scene rendered by Mitsuba 3's path tracer (scalar_rgb), linear radiance (h, w, 3); ``seed`` its sampler's."""
     import tempfile
 
     import mitsuba as mi
@@ -242,12 +248,12 @@ def mitsuba_cornell(scene: Any, size: tuple[int, int], spp: int, max_depth: int)
         if radiosity[k].max() > 0:
             shape["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": list(radiosity[k] / math.pi)}}
         objects[f"polygon{k}"] = shape
-    image = mi.render(mi.load_dict(objects))
+    image = mi.render(mi.load_dict(objects), seed=seed)
     return np.asarray(image, dtype=np.float64)[..., :3]
 
 
-def wall_means(image: np.ndarray, ids: np.ndarray) -> dict[str, list[float]]:
-    """Mean RGB per wall over its pixels, away from its edges (a 2-pixel erosion)."""
+def wall_masks(ids: np.ndarray) -> dict[str, np.ndarray]:
+    """Each wall's pixels away from its edges (a 2-pixel erosion), for the walls the image shows."""
     out = {}
     for wall, polys in WALLS.items():
         inside = np.isin(ids, polys)
@@ -256,8 +262,27 @@ def wall_means(image: np.ndarray, ids: np.ndarray) -> dict[str, list[float]]:
             for dx in (-2, -1, 0, 1, 2):
                 eroded &= np.roll(np.roll(inside, dy, axis=0), dx, axis=1)
         if eroded.any():
-            out[wall] = image[eroded].mean(axis=0).tolist()
+            out[wall] = eroded
     return out
+
+
+def wall_means(image: np.ndarray, ids: np.ndarray) -> dict[str, list[float]]:
+    """Mean RGB per wall over its pixels, away from its edges (a 2-pixel erosion)."""
+    return {wall: image[mask].mean(axis=0).tolist() for wall, mask in wall_masks(ids).items()}
+
+
+@functools.lru_cache(maxsize=4)
+def mitsuba_reference(scene_name: str, size: tuple[int, int], spp: int, max_depth: int = 64) -> dict[str, Any]:
+    """Mitsuba's render of a bundled scene, once per run: two halves of ``spp // 2`` samples (seeds 0 and 1).
+
+    ``image`` is their mean (``spp`` samples); ``halves`` let a comparison say how noisy it still is (their
+    difference is twice the mean's noise, in the mean). ``seconds``: both renders.
+    """
+    start = time.perf_counter()
+    scene = load_scene(scene_name)
+    halves = tuple(mitsuba_cornell(scene, size, max(spp // 2, 1), max_depth, seed=seed) for seed in (0, 1))
+    return {"image": 0.5 * (halves[0] + halves[1]), "halves": halves, "spp": 2 * max(spp // 2, 1),
+            "seconds": time.perf_counter() - start}
 
 
 def compare_with_mitsuba(ref: Any, quick: bool) -> dict | None:
@@ -272,9 +297,8 @@ def compare_with_mitsuba(ref: Any, quick: bool) -> dict | None:
     start = time.perf_counter()
     ours = R.render(scene, ref, size, quiet=True)
     ours_seconds = time.perf_counter() - start
-    start = time.perf_counter()
-    theirs = mitsuba_cornell(scene, size, spp, max_depth=64)
-    mitsuba_seconds = time.perf_counter() - start
+    peer = mitsuba_reference("cornell-box", size, spp, 64)         # cached: the adaptive comparison renders it too
+    theirs, mitsuba_seconds = peer["image"], peer["seconds"]
     ids = polygon_ids(scene, size)
     a, b = wall_means(ours, ids), wall_means(theirs, ids)
     rows = {w: {"radiosity": a[w], "mitsuba": b[w], "ratio": (np.array(a[w]) / np.maximum(b[w], 1e-12)).tolist()}
@@ -298,9 +322,10 @@ def furnace_figures(ref: Any, quick: bool) -> list[dict]:
     scene = load_scene("furnace")
     cube, _, _, _ = P.scene_polygons(scene)
     patches = R.make_patches(scene, ref, R.STAGE.options(scene).patch_size)
+    hemicube = S.MatrixRows(R.hemicube_formfactors(patches.quads, 128, "none").matrix())
     cases = [("exact (Howell, 6 patches)", S.MatrixRows(T.cube_formfactors(patch_normals(cube))), patch_areas(cube)),
-             (f"hemicube 128, {len(patches)} patches", S.MatrixRows(
-                 R.hemicube_formfactors(patches.quads, 128, "none").matrix()), patches.areas)]
+             (f"hemicube 128, {len(patches)} patches", hemicube, patches.areas),
+             ("hemicube 128 + reciprocity", S.reciprocal_rows(hemicube, patches.areas)[0], patches.areas)]
     out = []
     for label, rows, areas in cases:
         n = len(areas)
@@ -311,12 +336,15 @@ def furnace_figures(ref: Any, quick: bool) -> list[dict]:
                 err = sol.radiosity[:, 0] / T.furnace(1.0, rho) - 1
                 mean = float((sol.radiosity[:, 0] * areas).sum() / areas.sum() / T.furnace(1.0, rho) - 1)
                 out.append({"form_factors": label, "albedo": rho, "overshoot": overshoot, "shots": sol.steps,
-                            "converged": sol.converged, "mean_error": mean, "max_abs_error": float(np.abs(err).max())})
+                            "converged": sol.converged, "mean_error": mean, "max_abs_error": float(np.abs(err).max()),
+                            "patch_min": float(sol.radiosity[:, 0].min()), "patch_max": float(sol.radiosity[:, 0].max())})
     print("\nwhite furnace, E = 1, tolerance 1e-4: B against E/(1 − ρ)")
     print(f"{'form factors':<28} {'ρ':>5} {'ω':>4} {'shots':>7} {'mean error':>11} {'max |error|':>12}")
     for r in out:
         print(f"{r['form_factors']:<28} {r['albedo']:>5} {r['overshoot']:>4} {r['shots']:>7} {r['mean_error']:>+11.2e} "
               f"{r['max_abs_error']:>12.2e}" + ("" if r["converged"] else "  (not converged)"))
+    print("per patch at ρ = 0.5 (B = 2): " + "; ".join(f"{r['form_factors']} {r['patch_min']:.4f} .. {r['patch_max']:.4f}"
+                                                       for r in out if r["albedo"] == 0.5 and r["overshoot"] == 1.0))
     return out
 
 
@@ -427,6 +455,16 @@ def main(output: Path, quick: bool = False) -> None:
         for wall, row in peer["walls"].items():
             print(f"  {wall:<14} {np.round(row['radiosity'], 4)}  {np.round(row['mitsuba'], 4)}  ratio {np.round(row['ratio'], 3)}")
         report["mitsuba"] = peer
+    from bench import adaptive as AD
+    adaptive = AD.compare_adaptive(ref, quick)
+    if adaptive is not None:
+        table += AD.print_adaptive(adaptive)
+        figure = adaptive.pop("figure")
+        written = [AD.mesh_figure(figure, output / "adaptive-mesh.png")]
+        if not quick:                              # the handout's copy comes from the full run only
+            written.append(AD.mesh_figure(figure, AD.HANDOUT_FIGURE))
+        print("wrote " + " and ".join(str(p) for p in written))
+        report["adaptive"] = adaptive
     (output / "radiosity.json").write_text(json.dumps(report, indent=1))
     plot(results, output / "radiosity.png")
     print(f"wrote {output / 'radiosity.json'} and {output / 'radiosity.png'}")

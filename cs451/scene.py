@@ -116,8 +116,10 @@ class AreaLight(Light):
 class Material:
     ambient: Vec3 = field("Ambient reflectance (GL_AMBIENT).", (0.2, 0.2, 0.2), schema.non_negative)
     diffuse: Vec3 = field("Diffuse reflectance (GL_DIFFUSE); the albedo for radiosity.", (0.8, 0.8, 0.8), schema.unit_interval)
-    specular: Vec3 = field("Specular reflectance (GL_SPECULAR).", (0.0, 0.0, 0.0), schema.non_negative)
-    shininess: float = field("Phong exponent (GL_SHININESS, 0..128 in OpenGL).", 0.0, schema.non_negative)
+    specular: Vec3 = field("Specular reflectance (GL_SPECULAR); for stage 4, k_s of the highlight's normalised Phong lobe.",
+                           (0.0, 0.0, 0.0), schema.non_negative)
+    shininess: float = field("Phong exponent (GL_SHININESS, 0..128 in OpenGL); for stage 4, the lobe's n (0: no highlight).",
+                             0.0, schema.non_negative)
     emission: Vec3 = field("Emitted colour (GL_EMISSION); the emitted radiosity for stage 4.", (0.0, 0.0, 0.0), schema.non_negative)
     reflectance: Vec3 = field("Mirror reflectance for ray tracing.", (0.0, 0.0, 0.0), schema.unit_interval)
     transmittance: Vec3 = field("Transmittance for ray tracing.", (0.0, 0.0, 0.0), schema.unit_interval)

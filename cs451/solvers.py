@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import itertools
 import time
-from dataclasses import dataclass, field as dc_field
+from dataclasses import dataclass, field as dc_field, replace
 from typing import Any, Callable, Literal
 
 import numpy as np
@@ -53,6 +53,7 @@ class Solution:
     seconds: float
     order: list[int] = dc_field(default_factory=list)
     counters: dict[str, int] = dc_field(default_factory=dict)
+    reciprocity: dict[str, Any] | None = None   # what enforcing reciprocity changed (cs451.formfactors.reciprocity)
 
     @property
     def summary(self) -> str:
@@ -66,7 +67,11 @@ class Solution:
     def message(self) -> str:
         """The summary and every counter (``--verbose``)."""
         counters = ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in self.counters.items())
-        return self.summary + (f"; {counters}" if counters else "")
+        message = self.summary + (f"; {counters}" if counters else "")
+        if self.reciprocity is not None:
+            from .formfactors.reciprocity import describe
+            message += "\n" + describe(self.reciprocity)
+        return message
 
 
 def energy(values: np.ndarray, areas: np.ndarray) -> float:
@@ -236,10 +241,30 @@ def solve_iterative(method: Literal["jacobi", "gauss-seidel"], F: np.ndarray, ar
     return Solution(B, np.zeros_like(B), B, method, residual <= tolerance, residual, sweeps, seconds)
 
 
+def reciprocal_rows(rows: Any, areas: np.ndarray) -> tuple[MatrixRows, dict[str, Any]]:
+    """Every row of ``rows`` (its ``matrix()``), made reciprocal with each row's sum kept
+    (:func:`cs451.formfactors.reciprocity.enforce_reciprocity`), as :class:`MatrixRows`, and the report.
+
+    A shooting loop on these rows spreads a uniform field uniformly: receiver j gets Σ_i F_ij A_i/A_j = Σ_i F_ji."""
+    from .formfactors.reciprocity import enforce_reciprocity
+    F, report = enforce_reciprocity(rows.matrix(), areas)
+    return MatrixRows(F), report
+
+
 def solve(patches: Any, calls: Any, opts: Any, rows: Any, on_shot: Callable | None = None,
           rows_ahead: int = 0) -> Solution:
-    """Solve a scene's patches with the solver ``opts.solver`` names, on ``rows`` (the hemicube engine's, say)."""
+    """Solve a scene's patches with the solver ``opts.solver`` names, on ``rows`` (the hemicube engine's, say).
+
+    With ``opts.reciprocity`` every row is taken first and made reciprocal (:func:`reciprocal_rows`); the solvers,
+    the shooting loop included, run on that matrix, and the solution's ``reciprocity`` says what changed."""
     a, rho, E = patches.areas, patches.reflectance, patches.emission
+    if getattr(opts, "reciprocity", False):
+        corrected, report = reciprocal_rows(rows, a)
+        sol = solve(patches, calls, replace(opts, reciprocity=False), corrected, on_shot, rows_ahead)
+        shooting = {k: v for k, v in sol.counters.items() if k not in corrected.counters}
+        sol.counters = {**dict(getattr(rows, "counters", {})), **shooting}
+        sol.reciprocity = report
+        return sol
     if opts.solver == "progressive":
         return solve_progressive(calls, rows, a, rho, E, opts.tolerance, opts.max_shots, opts.overshoot, opts.ambient,
                                  on_shot, rows_ahead)

@@ -86,3 +86,16 @@ def test08_delta_form_factors_approach_the_exact_cells():
     # the midpoint rule: relative error falls as 1/r²
     assert errors[1] < errors[0] / 3.5 and errors[2] < errors[1] / 3.5
     assert errors[2] < 3e-3
+
+
+def test_the_inscribed_polygons_form_factor_approaches_the_disks_closed_form():
+    """The truth of the disk configurations (quadrature of the contour formula over inscribed polygons) meets
+    Howell's disk-to-disk closed form as the polygons get more sides, from below, by about the area they miss."""
+    for r1, r2 in ((1.0, 1.0), (0.5, 2.0)):
+        disk = truth.disk_to_disk(r1, r2, 1.0)
+        errors = []
+        for sides in (16, 64):
+            quads = truth.coaxial_disks(r1, r2, 1.0, sides)
+            errors.append(truth.polygons_form_factor(quads[:sides], truth.regular_polygon(r2, 1.0, sides), k=3) / disk - 1)
+        assert errors[0] < errors[1] < 0 and abs(errors[1]) < 1.5e-3 and abs(errors[0]) > 3 * abs(errors[1])
+

@@ -81,6 +81,50 @@ def test06_opposed_and_perpendicular_unit_squares_with_the_proximity_fix(ref):
     assert ff.counters["proximity_pairs"] == 2
 
 
+FAMILY = truth.form_factor_family()
+#: the disks whose rows take seconds (tens of thousands of H6 calls): run with the slow tests
+SLOW_FAMILY = {"disks r 2.5 to r 2.5", "disks r 2 to r 0.5", "disks r 2.5 to r 0.1"}
+
+
+def _family_value(ref, quads, shooters, receivers, **options):
+    q = np.array(quads, float)
+    ff = HemicubeFormFactors(q, calls(ref), resolution=128, **options)
+    a = patch_areas(q)[shooters]
+    return float((a[:, None] * ff.rows(shooters)[:, receivers]).sum() / a.sum()), ff
+
+
+@pytest.mark.parametrize("case", [pytest.param(c, id=c[0], marks=[pytest.mark.slow] if c[0].split(",")[0] in SLOW_FAMILY
+                                               else []) for c in FAMILY])
+def test06a_howell_and_disk_configurations_within_one_percent_with_default_options(ref, case):
+    """C-11, C-14 and coaxial disks, sizes 0.2 to 5 times the separation, at resolution 128 and default options."""
+    name, quads, shooters, receivers, exact = case
+    value, _ = _family_value(ref, quads, shooters, receivers)
+    assert value == pytest.approx(exact, rel=0.01), name
+
+
+def test06c_a_split_shooter_is_not_corrected_twice_and_close_rows_are_not_biased_low(ref):
+    # the fix divides by what the split's own hemicubes measure: unit squares one apart, 4 × 4, were 0.1684
+    value, ff = _family_value(ref, truth.opposed_squares(1, 1), [0], [1], shooter_split=4)
+    assert value == pytest.approx(truth.howell_c11(1, 1, 1), rel=2e-3) and ff.counters["proximity_pairs"] == 1
+    # no cap on the visible fraction: over many rotations the fixed entry averages to the truth, not below it
+    quads = truth.parallel_rectangles(1.0, 0.3, 0.4)
+    exact = truth.howell_c11(1.0, 0.3, 0.4)
+    values = [_family_value(ref, quads, [0], [1], seed=s, proximity_distance=2.0)[0] / exact for s in range(12)]
+    assert abs(np.mean(values) - 1) < 1e-3
+
+
+def test06d_far_pairs_are_left_alone_and_middle_ones_corrected_by_the_kernel(ref):
+    q = np.array(truth.parallel_rectangles(0.2, 0.2, 1.0), float)      # 6 radii apart: off by +1.4% from the centre
+    plain = HemicubeFormFactors(q, calls(ref), resolution=128, proximity="none").row(0)[1]
+    value, ff = _family_value(ref, q, [0], [1])
+    exact = truth.howell_c11(0.2, 0.2, 1.0)
+    assert plain / exact - 1 > 0.01 and abs(value / exact - 1) < 2e-3
+    assert ff.counters["proximity_kernel_pairs"] == 1 and ff.counters["proximity_evaluations"] == 0
+    far = np.array(truth.parallel_rectangles(0.02, 0.02, 1.0), float)  # 70 radii apart: within 0.1% as it is
+    value, ff = _family_value(ref, far, [0], [1])
+    assert ff.counters["proximity_kernel_pairs"] == ff.counters["proximity_pairs"] == 0
+
+
 def test06b_splitting_the_shooter_converges_as_one_over_k_squared(ref):
     errors = []
     for k in (1, 2, 4):

@@ -28,7 +28,8 @@ contour formula) times the fraction of j that the hemicube found visible. With
 One module a job: :mod:`.calls` (what the engine asks of a stage-3 implementation),
 :mod:`.geometry` (where hemicubes stand), :mod:`.atlas` (the instanced draw and read-back),
 :mod:`.rows` (rows, caching, the proximity fix, checks), :mod:`.pictures` (for people),
-:mod:`.raycast` (Monte Carlo on Embree, for comparison).
+:mod:`.raycast` (Monte Carlo on Embree, for comparison), :mod:`.reciprocity` (computed rows made
+reciprocal, A_i F_ij = A_j F_ji, each row keeping its sum: stage 4's ``reciprocity`` option).
 """
 from __future__ import annotations
 
@@ -37,9 +38,9 @@ from .calls import StageCalls
 from .geometry import clip_polygon_to_plane, default_near_far, default_up, gauss_points, hemicube_inputs, hemicube_up
 from .pictures import formfactor_image, item_buffer_image, palette, unfold
 from .raycast import formfactor_matrix_raycast
-from .rows import BLIND_ROW_SUM, PROXIMITY_GAUSS, HemicubeFormFactors
+from .rows import BLIND_ROW_SUM, HemicubeFormFactors
 
 __all__ = ["FRAGMENT_INTERFACE", "MAX_ATLAS", "VERTEX_INTERFACE", "ItemBufferRenderer", "StageCalls",
            "clip_polygon_to_plane", "default_near_far", "default_up", "gauss_points", "hemicube_inputs", "hemicube_up",
            "formfactor_image", "item_buffer_image", "palette", "unfold", "formfactor_matrix_raycast",
-           "BLIND_ROW_SUM", "PROXIMITY_GAUSS", "HemicubeFormFactors"]
+           "BLIND_ROW_SUM", "HemicubeFormFactors"]

@@ -20,10 +20,10 @@ from ..errors import KitError
 from ..patches import as_quads, patch_areas, patch_centers, patch_normals
 from .atlas import ItemBufferRenderer
 from .calls import StageCalls
-from .geometry import _sub_quads, clip_polygon_to_plane, default_near_far, gauss_points, hemicube_up
+from .geometry import _sub_quads, default_near_far, hemicube_up
+from .proximity import fix_row
 
 BLIND_ROW_SUM = 0.05  # a row summing to less sees (almost) nothing: with resample_blind, look again from over the patch
-PROXIMITY_GAUSS = 5   # Gauss-Legendre points per side of the shooter for close pairs (C-14, 1 × 0.5 to 1 × 2: 0.07%)
 
 
 class HemicubeFormFactors:
@@ -91,7 +91,8 @@ class HemicubeFormFactors:
         self._tables: tuple[np.ndarray, np.ndarray] | None = None
         self._rows: dict[int, np.ndarray] = {}
         self.counters = {"hemicubes_rendered": 0, "rows_computed": 0, "rows_cached_hits": 0, "patches_culled": 0,
-                         "patches_backfacing": 0, "proximity_pairs": 0, "blind_rows_resampled": 0, "readbacks": 0}
+                         "patches_backfacing": 0, "proximity_pairs": 0, "proximity_kernel_pairs": 0, "proximity_evaluations": 0,
+                         "blind_rows_resampled": 0, "readbacks": 0}
         self.seconds = {"render": 0.0, "sum": 0.0, "proximity": 0.0}
 
     # -- lazily built GPU state ------------------------------------------------
@@ -228,34 +229,36 @@ class HemicubeFormFactors:
         jobs = [(k, p, self.normals[i], float(self.normals[i] @ self.centers[i]), i, w)
                 for k, i in enumerate(batch) for p, w in zip(*self.shooter_points(i))]
         rows = self._render_rows(jobs, len(batch))
+        stands: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         if self.resample_blind:
             blind = [k for k, i in enumerate(batch) if rows[k].sum() < BLIND_ROW_SUM]
             if blind:
-                for k, row in zip(blind, self._resampled_rows([batch[k] for k in blind])):
-                    if row is not None:
-                        rows[k] = row
+                for k, found in zip(blind, self._resampled_rows([batch[k] for k in blind])):
+                    if found is not None:
+                        rows[k], stands[k] = found
         t2 = time.perf_counter()
         self._count_culled(batch)
         for k, i in enumerate(batch):
-            self._rows[i] = self._proximity_fix(i, rows[k]) if self.proximity == "contour" else rows[k]
+            self._rows[i] = self._proximity_fix(i, rows[k], stands.get(k)) if self.proximity == "contour" else rows[k]
             self.counters["rows_computed"] += 1
         self.seconds["proximity"] += time.perf_counter() - t2
 
-    def _resampled_rows(self, patches: list[int]) -> list[np.ndarray | None]:
-        """Rows of patches blind from their centres: the area-weighted mean over the sub-quad centres that see
-        (None where none sees: the patch faces an opening, and its centre's row stands)."""
+    def _resampled_rows(self, patches: list[int]) -> list[tuple[np.ndarray, tuple[np.ndarray, np.ndarray]] | None]:
+        """Rows of patches blind from their centres: the area-weighted mean over the sub-quad centres that see, with
+        those centres and their weights (None where none sees: the patch faces an opening, and its centre's row stands)."""
         points = [self.shooter_points(i, self.resample_blind) for i in patches]
         stands = [(i, p) for i, (ps, _) in zip(patches, points) for p in ps]
         jobs = [(k, p, self.normals[i], float(self.normals[i] @ self.centers[i]), i, 1.0) for k, (i, p) in enumerate(stands)]
         sub = self._render_rows(jobs, len(jobs))
-        out: list[np.ndarray | None] = []
+        out: list[tuple[np.ndarray, tuple[np.ndarray, np.ndarray]] | None] = []
         start = 0
         for ps, weights in points:
             rows = sub[start:start + len(ps)]
             start += len(ps)
             sums = rows.sum(axis=1)
             seeing = sums >= max(0.5 * sums.max(), BLIND_ROW_SUM)
-            out.append(weights[seeing] @ rows[seeing] / weights[seeing].sum() if seeing.any() else None)
+            w = weights[seeing] / weights[seeing].sum() if seeing.any() else weights
+            out.append((w @ rows[seeing], (ps[seeing], w)) if seeing.any() else None)
         self.counters["blind_rows_resampled"] += len(patches)
         return out
 
@@ -270,37 +273,11 @@ class HemicubeFormFactors:
         facing_away = np.einsum("bjd,jd->bj", self.centers[None, :, :] - self.centers[b][:, None, :], self.normals) >= 0
         self.counters["patches_backfacing"] += int((facing_away & ~behind).sum())
 
-    def close_patches(self, i: int) -> np.ndarray:
-        """Indices of the patches close to patch i (not i, not wholly behind its plane)."""
-        gap = np.linalg.norm(self.centers - self.centers[i], axis=1) - self.radii
-        heights = (self.quads - self.centers[i]) @ self.normals[i]
-        close = (gap < self.proximity_distance * self.radii[i]) & (heights.max(axis=1) > 1e-9 * self.radii[i])
-        close[i] = False
-        return np.flatnonzero(close)
-
-    def _proximity_fix(self, i: int, row: np.ndarray) -> np.ndarray:
-        close = self.close_patches(i)
-        if not len(close):
-            return row
-        row = row.copy()
-        c, n = self.centers[i], self.normals[i]
-        points, weights = gauss_points(self.quads[i], PROXIMITY_GAUSS)
-        weights = weights / weights.sum()
-        for j in close:
-            poly = clip_polygon_to_plane(self.quads[j], c, n)
-            if len(poly) < 3:
-                continue
-            at_center = self.calls.contour(c, n, poly)
-            if at_center > 1e-12:
-                visible = min(max(row[j] / at_center, 0.0), 1.0)
-            else:
-                visible = 1.0  # seen edge-on from the centre: the hemicube cannot tell; assume unoccluded
-            if visible == 0.0:
-                continue
-            average = sum(w * self.calls.contour(p, n, poly) for p, w in zip(points, weights))
-            row[j] = visible * average
-            self.counters["proximity_pairs"] += 1
-        return row
+    def _proximity_fix(self, i: int, row: np.ndarray, stands: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+        """Row i corrected for the shooter's extent (:mod:`.proximity`), measured from ``stands`` (points, weights):
+        by default where its hemicubes stand (:meth:`shooter_points`)."""
+        return fix_row(self.calls, self.quads, self.normals, self.centers, self.radii, i, row,
+                       self.shooter_points(i) if stands is None else stands, self.proximity_distance, self.counters)
 
     # -- checks reported for every run ----------------------------------------------
     def report(self) -> dict[str, Any]:

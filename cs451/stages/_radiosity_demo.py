@@ -3,7 +3,8 @@
 Everything goes through the stage interface (the submission's R1, R3, R4 and R5), the shared
 window (:mod:`cs451.demos.window`) and frame writer (:mod:`cs451.demos.frames`). The window
 shows what the frames show: the scene's exposure and encoding (sRGB for the Cornell box) are
-applied as the panels are drawn, not left linear.
+applied as the panels are drawn, not left linear. A scene with glossy materials (``glossy-box``) shows their
+highlight (:mod:`cs451.specular`) on both panels, as ``cs451 render`` does.
 """
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ import numpy as np
 
 from ..demos.frames import write_frames
 from ..demos.window import Window
-from ..drawing import GouraudDrawer, camera_matrix
+from ..drawing import GouraudDrawer, camera_matrix, with_highlight
 from ..imageio import to_uint8
 from ..scene import load_scene
 from . import radiosity as R
@@ -46,6 +47,8 @@ def demo(module: Any, output: Path, window: bool, frames: int | None, scene_name
     drawer = GouraudDrawer(win.ctx if win else None)
     rows = R.hemicube_formfactors(patches.quads, opts.resolution, opts.proximity, ctx=drawer.ctx, batch=R.ROWS_PER_BATCH)
     encoding = (scene.image.exposure, scene.image.srgb)
+    gloss = R.glossy.highlight(scene, patches, opts.specular_samples) if opts.specular else None
+    gloss = gloss.scaled(opts.exposure) if gloss is not None else None     # the highlight on both panels
     pictures: list[np.ndarray] = []
     captions: list[str] = []
 
@@ -53,12 +56,16 @@ def demo(module: Any, output: Path, window: bool, frames: int | None, scene_name
         out = []
         for k, values in enumerate((B, B + rho * calls.ambient(a, rho, dB))):
             positions, colors, corners = calls.corner_colors(patches.quads, patches.parent, values)
+            shine = None
+            if gloss is not None:
+                positions, colors, corners, shine = with_highlight(positions, colors, corners, gloss)
             scaled = colors * (opts.exposure / math.pi)
             if win is not None:
                 drawer.draw(positions, scaled, corners, mvp, width, height, scene.image.background, win.ctx.screen,
-                            viewport=(k * width, 0, width, height), encoding=encoding)
+                            viewport=(k * width, 0, width, height), encoding=encoding, highlight=shine)
             else:
-                out.append(drawer.draw(positions, scaled, corners, mvp, width, height, scene.image.background))
+                out.append(drawer.draw(positions, scaled, corners, mvp, width, height, scene.image.background,
+                                       highlight=shine))
         return out
 
     def show(shots: int, B: np.ndarray, dB: np.ndarray, last: bool = False) -> None:

@@ -7,7 +7,8 @@ student's subdivision (R1), the hemicube engine of stage 3
 (:class:`cs451.formfactors.HemicubeFormFactors`, lazily, one row when a patch
 shoots) gives form factors, :mod:`cs451.solvers` runs the student's shooting
 loop (R2, R3) and ambient term (R4), and :mod:`cs451.drawing` draws the student's
-vertex colours (R5) Gouraud-shaded. The image shows radiance B/π, so it is
+vertex colours (R5) Gouraud-shaded, adding the highlight of glossy materials
+(:mod:`cs451.specular`, notes §2.3) on top. The image shows radiance B/π, so it is
 directly comparable with a path tracer.
 """
 from __future__ import annotations
@@ -22,6 +23,7 @@ from typing import Any, Callable, Iterator, Literal
 import numpy as np
 
 from .. import drawing, patching, schema, solvers
+from .. import specular as glossy       # the module; `specular` is also an option below
 from ..patching import Patches
 from ..solvers import MatrixRows, Solution, solve_direct, shooting_matrix
 from ..scene import AreaLight, Polygon, Scene, parse_scene
@@ -69,7 +71,20 @@ class RadiosityOptions:
         "Stage 3's fix for close patches: 'none' (rows of a closed scene sum to 1, so energy is conserved) or "
         "'contour' (exact point-to-polygon form factors near the shooter: more accurate single entries, but rows "
         "sum to up to 0.7% over 1, which a furnace of albedo 0.99 amplifies a hundredfold, and 3× slower).", "none")
+    # the grader's trusted form factors (probe_system) take this default too: see hemicube_formfactors
+    reciprocity: bool = field(
+        "Make the hemicube's rows reciprocal (A_i F_ij = A_j F_ji), keeping each row's sum, before solving "
+        "(cs451.formfactors.reciprocity): a uniform furnace is then uniform patch by patch, not only on average. "
+        "It needs every row, so the shooting loop runs on the whole matrix, computed first: n hemicubes where "
+        "shooting renders only its shooters' rows, and 6 n × n arrays at the peak; the scaling takes 1 ms for 100 "
+        "patches, 2 s for 2,400.", False)
     exposure: float = field("Multiplies the displayed radiance, before the scene's own exposure.", 1.0, schema.positive)
+    specular: bool = field(
+        "Add the direct surface reflection of the area lights (notes §2.3) to the display, per pixel, for materials "
+        "with a specular above 0 and a shininess above 0 (cs451.specular: a normalised Phong lobe, no shadows); "
+        "scenes without such a material are drawn exactly as with false. The solve is the same either way.", True)
+    specular_samples: int = field("Points per edge of each area light for the highlight (a k × k grid).",
+                                  glossy.DEFAULT_SAMPLES, glossy.check_samples)
 
     def validate(self, ctx: Context) -> None:
         if not self.overshoot < 2.0:
@@ -151,10 +166,12 @@ def solve_progressive(impl: Any, rows: Any, *args: Any, **kwargs: Any) -> Soluti
 
 
 def solve(patches: Patches, impl: Any, opts: RadiosityOptions, rows: Any = None, on_shot: Callable | None = None) -> Solution:
-    """Solve with the chosen solver; rows from the hemicube engine unless given."""
+    """Solve with the chosen solver; rows from the hemicube engine unless given (``opts.reciprocity``: every row,
+    made reciprocal first, :func:`cs451.solvers.solve`)."""
     if rows is None:
+        one_by_one = opts.solver == "progressive" and not opts.reciprocity
         rows = hemicube_formfactors(patches.quads, opts.resolution, opts.proximity,
-                                    batch=ROWS_PER_BATCH if opts.solver == "progressive" else 256)
+                                    batch=ROWS_PER_BATCH if one_by_one else 256)
     return solvers.solve(patches, calls(impl), opts, rows, on_shot, rows_ahead=ROWS_PER_BATCH - 1)
 
 
@@ -167,12 +184,14 @@ def camera_view(scene: Scene) -> np.ndarray:
 
 
 def draw_solution(scene: Scene, impl: Any, patches: Patches, display: np.ndarray, size: tuple[int, int] | None,
-                  exposure: float = 1.0, drawer: Any = None, view: np.ndarray | None = None) -> np.ndarray:
-    """The Gouraud-shaded image of per-patch radiosities through the implementation's R5 (:mod:`cs451.drawing`)."""
+                  exposure: float = 1.0, drawer: Any = None, view: np.ndarray | None = None,
+                  highlight: glossy.Highlight | None = None) -> np.ndarray:
+    """The Gouraud-shaded image of per-patch radiosities through the implementation's R5 (:mod:`cs451.drawing`),
+    with the glossy materials' highlight (:func:`cs451.specular.highlight`) on top when one is given."""
     return drawing.draw_solution(scene, calls(impl).corner_colors, patches, display, size,
-                                 camera_view(scene) if view is None else view, exposure, drawer)
+                                 camera_view(scene) if view is None else view, exposure, drawer, highlight)
 
-def hemicube_formfactors(quads: np.ndarray, resolution: int = 128, proximity: str = "contour", ctx: Any = None,
+def hemicube_formfactors(quads: np.ndarray, resolution: int = 128, proximity: str | None = None, ctx: Any = None,
                          batch: int = 256, seed: int = 0) -> Any:
     """Stage 3's hemicube engine over the stage-3 implementation this copy has (lazy, cached rows).
 
@@ -181,14 +200,16 @@ def hemicube_formfactors(quads: np.ndarray, resolution: int = 128, proximity: st
     makes its own context current for each batch and leaves it so. ``batch`` hemicubes share a
     read-back: 1 suits rows asked for one at a time (shooting), the default suits whole matrices.
     ``seed`` picks the hemicubes' random rotations (another seed: an independent estimate of F).
+    Faces are drawn culled (only the patches that can land in each): the shaders are the trusted reference's.
     """
     from ..formfactors import HemicubeFormFactors
     from . import hemicube as H
 
+    if proximity is None:       # the stage's default, so that `cs451 render` and the grader's systems agree
+        proximity = RadiosityOptions.__dataclass_fields__["proximity"].default
     return HemicubeFormFactors(quads, H.calls(STAGE.trusted("hemicube")), resolution=resolution, proximity=proximity, ctx=ctx,
                                batch=batch, seed=seed, resample_blind=RESAMPLE_BLIND, cull=True)
 
-    Faces are drawn culled (only the patches that can land in each): the shaders are the trusted reference's.
 
 @contextlib.contextmanager
 def shooting_progress(patches: Patches, opts: RadiosityOptions) -> Iterator[Callable | None]:
@@ -217,17 +238,19 @@ def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, quiet: 
            **overrides: Any) -> np.ndarray:
     """Subdivide, solve and draw a scene with an implementation; returns linear radiance (h, w, 3).
 
-    Prints a one-line summary (every counter with ``--verbose``, nothing when ``quiet``) and shows the
-    shooting's progress toward the tolerance.
+    Glossy materials get their highlight (``options.radiosity.specular``), prepared before the solve so that a
+    refusal comes first. Prints a one-line summary (every counter with ``--verbose``, nothing when ``quiet``)
+    and shows the shooting's progress toward the tolerance.
     """
     from ..progress import verbose
     opts = STAGE.options(scene, **overrides)
     patches = make_patches(scene, impl, opts.patch_size)
+    gloss = glossy.highlight(scene, patches, opts.specular_samples) if opts.specular else None  # refused before solving
     with shooting_progress(patches, opts) as on_shot:
         sol = solve(patches, impl, opts, on_shot=on_shot)
     if not quiet:
         print(("" if sol.converged else "warning: ") + (sol.message if verbose() else sol.summary), file=sys.stderr)
-    return draw_solution(scene, impl, patches, sol.display, size, opts.exposure)
+    return draw_solution(scene, impl, patches, sol.display, size, opts.exposure, highlight=gloss)
 
 
 # --- probes: what the autograder's worker asks a submission for -----------------------
@@ -288,7 +311,7 @@ def probe_system(impl: Any, scene: dict, patch_size: float = 0.0, resolution: in
     """Trusted inputs for the scene tests (run on the reference only): patches, colours, the full F and the camera view."""
     sc = parse_scene(scene, "<probe scene>")
     p = make_patches(sc, impl, patch_size)
-    F = hemicube_formfactors(p.quads, resolution).matrix()
+    F = hemicube_formfactors(p.quads, resolution, STAGE.options(sc).proximity).matrix()   # as `cs451 render` would
     return {"quads": p.quads, "parent": p.parent, "areas": p.areas, "reflectance": p.reflectance,
             "emission": p.emission, "F": np.asarray(F, dtype=np.float64), "view": camera_view(sc)}
 
@@ -351,15 +374,24 @@ def patch_count(scene: Scene, patch_size: float) -> float:
 
 
 def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
+    from ..formfactors.reciprocity import MATRICES
     from ..limits import Cost
     from .hemicube import hemicube_bytes
     opts = STAGE.options(scene)
     n = patch_count(scene, opts.patch_size)
-    batch = 1 if opts.solver == "progressive" else 256
-    return [Cost("options.radiosity.patch_size", 8.0 * n * n + PATCH_BYTES * n,
-                 f"{n:,.0f} patches and their form factors (patch_size {opts.patch_size:g})"),
+    batch = 1 if opts.solver == "progressive" and not opts.reciprocity else 256
+    matrices = 1 + MATRICES if opts.reciprocity else 1       # the engine's rows, and the correction's arrays
+    return [Cost("options.radiosity.patch_size", 8.0 * matrices * n * n + PATCH_BYTES * n,
+                 f"{n:,.0f} patches and their form factors (patch_size {opts.patch_size:g}"
+                 f"{', reciprocity: ' + str(matrices) + ' matrices' if opts.reciprocity else ''})"),
             Cost("options.radiosity.resolution", hemicube_bytes(opts.resolution, batch),
                  f"{batch} hemicube(s) of resolution {opts.resolution} at a time")]
+
+
+def diagrams() -> dict:
+    """The handout's picture of the glossy box without and with its highlight (:mod:`._radiosity_diagrams`)."""
+    from ._radiosity_diagrams import PICTURES
+    return PICTURES
 
 
 STAGE = Stage(
@@ -371,5 +403,6 @@ STAGE = Stage(
     options_type=RadiosityOptions,
     draws=(Polygon, AreaLight),
     estimate=estimate,
+    diagrams=diagrams,
 )
 
