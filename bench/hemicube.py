@@ -31,7 +31,7 @@ from autograder.hemicube import truth
 from cs451.formfactors import HemicubeFormFactors, formfactor_matrix_raycast
 from cs451.gl import create_context, renderer_name
 from cs451.impl import load_impl, resolve_impl
-from cs451.patches import scene_polygons
+from cs451.patches import patch_areas, scene_polygons
 
 from bench.meshes import subdivide_uniform
 from cs451.scene import load_scene
@@ -87,6 +87,38 @@ def closed_forms(impl, resolutions: list[int], ctx) -> list[dict]:
             out.append({"config": name, "resolution": res, "exact": exact, "error": err,
                         "seconds_per_row": float(np.median(seconds)), "proximity": proximity, "seeds": seeds})
     return out
+
+
+def family(impl, ctx, resolution: int = 128) -> list[dict]:
+    """Howell's C-11 and C-14 and coaxial disks (truth.form_factor_family) at one resolution: the error with the
+    default options (the proximity fix as it chooses) and with no fix, H6 calls and time per configuration."""
+    out = []
+    for name, quads, shooters, receivers, exact in truth.form_factor_family():
+        q = np.array(quads, float)
+        a = patch_areas(q)[shooters]
+        row = {"config": name, "exact": exact}
+        for label, options in (("default", {}), ("none", {"proximity": "none"})):
+            ff = HemicubeFormFactors(q, calls(impl), resolution=resolution, ctx=ctx, **options)
+            t0 = time.perf_counter()
+            value = float((a[:, None] * ff.rows(shooters)[:, receivers]).sum() / a.sum())
+            row[label] = {"error": value / exact - 1, "seconds": time.perf_counter() - t0,
+                          "h6_calls": ff.counters["proximity_evaluations"],
+                          "kernel_pairs": ff.counters["proximity_kernel_pairs"], "h6_pairs": ff.counters["proximity_pairs"]}
+        out.append(row)
+    return out
+
+
+def print_family(rows: list[dict], resolution: int) -> None:
+    print(f"\nHowell C-11, C-14 and coaxial disks at resolution {resolution}: error with the default options "
+          "(the proximity fix as it chooses) and with none")
+    print(f"{'configuration':44s} {'exact':>8s} {'default':>8s} {'none':>8s} {'H6 pairs':>8s} {'kernel':>6s} "
+          f"{'H6 calls':>8s} {'s':>6s}")
+    for r in rows:
+        d = r["default"]
+        print(f"{r['config']:44s} {r['exact']:8.5f} {d['error']:+8.2%} {r['none']['error']:+8.2%} {d['h6_pairs']:8d} "
+              f"{d['kernel_pairs']:6d} {d['h6_calls']:8d} {d['seconds']:6.2f}")
+    worst = max(rows, key=lambda r: abs(r["default"]["error"]))
+    print(f"worst with the default options: {worst['default']['error']:+.2%} ({worst['config']})")
 
 
 def row_error(F: np.ndarray, ref: np.ndarray) -> float:
@@ -186,6 +218,9 @@ def main(output: Path, quick: bool = False) -> None:
             for r in resolutions]
     print(f"{'time per row (s), two-patch scenes':48s} " + " ".join(f"{s:9.4f}" for s in secs))
 
+    howell = family(impl, ctx)
+    print_family(howell, 128)
+
     k = 4 if quick else 8
     samples = [250, 1000, 4000, 16000] if quick else [250, 1000, 4000, 16000, 64000]
     box = cornell(impl, resolutions, 512 if quick else 1024, k, samples, ctx)
@@ -209,7 +244,7 @@ def main(output: Path, quick: bool = False) -> None:
           f"reciprocity error {fix['split2_reciprocity_error_total']:.2%}")
     if not box["raycast"]:
         box["equal_error"] = []
-        _finish(output, ctx, quick, forms, box, resolutions)
+        _finish(output, ctx, quick, forms, box, resolutions, howell)
         return
     print("\nRay casting (Embree, cosine-weighted rays from each patch's centre), same scene, same error measure")
     print(f"{'rays/patch':>10s} {'error':>9s} {'matrix s':>9s} {'ms/row':>8s}")
@@ -228,11 +263,12 @@ def main(output: Path, quick: bool = False) -> None:
         mark = " (extrapolated)" if extrapolated and tr else ""
         print(f"  error {target:5.0%}: hemicube {fmt(th):>11s}, ray casting {fmt(tr):>11s}{mark}{ratio}")
     box["equal_error"] = equal
-    _finish(output, ctx, quick, forms, box, resolutions)
+    _finish(output, ctx, quick, forms, box, resolutions, howell)
 
 
-def _finish(output: Path, ctx, quick: bool, forms: list[dict], box: dict, resolutions: list[int]) -> None:
-    data = {"renderer": renderer_name(ctx), "quick": quick, "closed_forms": forms, "cornell": box}
+def _finish(output: Path, ctx, quick: bool, forms: list[dict], box: dict, resolutions: list[int],
+            howell: list[dict] | None = None) -> None:
+    data = {"renderer": renderer_name(ctx), "quick": quick, "closed_forms": forms, "cornell": box, "family": howell}
     (output / "hemicube.json").write_text(json.dumps(data, indent=1))
     _plot(output / "hemicube.png", forms, box, resolutions)
     print(f"\nwrote {output / 'hemicube.json'} and {output / 'hemicube.png'}")
