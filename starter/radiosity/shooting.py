@@ -13,6 +13,7 @@ from typing import Callable
 import numpy as np
 
 
+
 def shoot(i: int, row: np.ndarray, areas: np.ndarray, reflectance: np.ndarray,
           radiosity: np.ndarray, unshot: np.ndarray) -> tuple:
     """Shoot patch ``i``'s unshot radiosity to every patch, once.
