@@ -414,3 +414,16 @@ def test_rows_ahead_render_the_likely_next_shooters_in_the_same_batch():
     ahead.row(5)                                  # rendered ahead: no new batch
     assert len(source.batches) == 2
     assert ahead.counters() == {"rows_ahead": 2, "rows_ahead_unused": 1}
+
+
+def test_faces_are_culled_only_for_the_kits_own_stage_3(tmp_path, monkeypatch):
+    """Culling assumes the reference's shaders; a student copy's own hemicube/ package is drawn unculled."""
+    import shutil
+    import cs451.impl as impl
+    quads = np.array([[[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 0, 1], [0, 1, 1], [1, 1, 1], [1, 0, 1]]], float)
+    assert R.hemicube_formfactors(quads, 16).cull
+    own = tmp_path / "hemicube"
+    shutil.copytree(impl.KIT_ROOT / "reference" / "hemicube", own)
+    monkeypatch.setattr(impl, "earlier_stage_impl", lambda stage: own)
+    ff = R.hemicube_formfactors(quads, 16)
+    assert not ff.cull and ff.row(0)[1] > 0.1

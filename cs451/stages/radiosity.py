@@ -201,15 +201,19 @@ def hemicube_formfactors(quads: np.ndarray, resolution: int = 128, proximity: st
     makes its own context current for each batch and leaves it so. ``batch`` hemicubes share a
     read-back: 1 suits rows asked for one at a time (shooting), the default suits whole matrices.
     ``seed`` picks the hemicubes' random rotations (another seed: an independent estimate of F).
-    Faces are drawn culled (only the patches that can land in each): the shaders are the trusted reference's.
+    Faces are drawn culled (only the patches that can land in each) when the stage-3 code is the kit's reference,
+    whose shaders place vertices as culling assumes; a student's own stage-3 package is drawn unculled.
     """
     from ..formfactors import HemicubeFormFactors
     from . import hemicube as H
 
+    from ..impl import KIT_ROOT, earlier_stage_impl
+
     if proximity is None:       # the stage's default, so that `cs451 render` and the grader's systems agree
         proximity = RadiosityOptions.__dataclass_fields__["proximity"].default
+    reference = earlier_stage_impl("hemicube").resolve() == (KIT_ROOT / "reference" / "hemicube").resolve()
     return HemicubeFormFactors(quads, H.calls(STAGE.trusted("hemicube")), resolution=resolution, proximity=proximity, ctx=ctx,
-                               batch=batch, seed=seed, resample_blind=RESAMPLE_BLIND, cull=True)
+                               batch=batch, seed=seed, resample_blind=RESAMPLE_BLIND, cull=reference)
 
 
 @contextlib.contextmanager
