@@ -1,5 +1,8 @@
 """``cs451 bench radiosity``: error against run time for progressive refinement and the full-matrix solvers.
 
+First the main job itself (:mod:`bench.main_job`): ``cs451 render`` of the Cornell box and the room as a user runs
+it, with the solve split into form factors and the shooting loop.
+
 For each scene (the Cornell box, the room) and patch size, every method solves the same
 equations B = E + ρF̃B on the same hemicube rows (F̃ from the shooters' rows; see
 ``shooting_matrix``), and its error is measured against the direct solve of the full matrix:
@@ -272,14 +275,20 @@ def wall_means(image: np.ndarray, ids: np.ndarray) -> dict[str, list[float]]:
 
 
 @functools.lru_cache(maxsize=4)
-def mitsuba_reference(scene_name: str, size: tuple[int, int], spp: int, max_depth: int = 64) -> dict[str, Any]:
+def mitsuba_reference(scene_name: str, size: tuple[int, int], spp: int, max_depth: int = 64,
+                      camera: tuple[tuple[str, Any], ...] = ()) -> dict[str, Any]:
     """Mitsuba's render of a bundled scene, once per run: two halves of ``spp // 2`` samples (seeds 0 and 1).
 
     ``image`` is their mean (``spp`` samples); ``halves`` let a comparison say how noisy it still is (their
-    difference is twice the mean's noise, in the mean). ``seconds``: both renders.
+    difference is twice the mean's noise, in the mean). ``seconds``: both renders. ``camera``: (field, value)
+    pairs that replace the scene camera's (another view of the same scene).
     """
+    import dataclasses
+
     start = time.perf_counter()
     scene = load_scene(scene_name)
+    if camera:
+        scene = dataclasses.replace(scene, camera=dataclasses.replace(scene.camera, **dict(camera)))
     halves = tuple(mitsuba_cornell(scene, size, max(spp // 2, 1), max_depth, seed=seed) for seed in (0, 1))
     return {"image": 0.5 * (halves[0] + halves[1]), "halves": halves, "spp": 2 * max(spp // 2, 1),
             "seconds": time.perf_counter() - start}
@@ -432,6 +441,9 @@ def plot(results: list[dict], path: Path) -> None:
 def main(output: Path, quick: bool = False) -> None:
     ref = load_impl(resolve_impl("reference", "radiosity"), "radiosity")
     output.mkdir(parents=True, exist_ok=True)
+    from bench import main_job
+    split = main_job.measure(ref)                      # first, on a quiet machine: the main job's time, split
+    main_table = main_job.print_split(split)
     results = []
     for scene_name, sizes in CASES[quick]:
         for patch_size in sizes:
@@ -443,7 +455,9 @@ def main(output: Path, quick: bool = False) -> None:
     table += print_substructured(substructured)
     furnace = furnace_figures(ref, quick)
     peer = compare_with_mitsuba(ref, quick)
-    report: dict[str, Any] = {"cases": results, "substructured": substructured, "table": table, "furnace": furnace}
+    table = main_table + table
+    report: dict[str, Any] = {"main_job": split, "cases": results, "substructured": substructured, "table": table,
+                              "furnace": furnace}
     if peer is not None:
         from cs451.imageio import save_png
 

@@ -76,6 +76,7 @@ class SubstructuredSolution:
     shots: int
     seconds: float
     order: list[int] = field(default_factory=list)
+    shot: np.ndarray | None = None            # (n, 3) the radiosity each patch shot in all, summed over its shots
 
 
 def split_patches(patches: Any, k: int) -> tuple[np.ndarray, np.ndarray]:
@@ -87,7 +88,8 @@ def split_patches(patches: Any, k: int) -> tuple[np.ndarray, np.ndarray]:
 
 def solve_substructured(rows: Any, parent: np.ndarray, element_areas: np.ndarray, reflectance: np.ndarray,
                         emission: np.ndarray, tolerance: float = 1e-3, max_shots: int = 0,
-                        on_shot: Callable[[int, int, np.ndarray, np.ndarray], None] | None = None
+                        on_shot: Callable[[int, int, np.ndarray, np.ndarray], None] | None = None,
+                        radiosity: np.ndarray | None = None, unshot: np.ndarray | None = None
                         ) -> SubstructuredSolution:
     """Progressive refinement with patches shooting to elements.
 
@@ -96,14 +98,21 @@ def solve_substructured(rows: Any, parent: np.ndarray, element_areas: np.ndarray
     most first. A patch shoots its mean unshot radiosity ΔB_p: every element e receives ρ_e·ΔB_p·F_pe·A_p/A_e, into
     B_e and ΔB_e; the shooter's elements' ΔB become 0. Stops when the unshot energy is at most
     ``tolerance`` of the emitted energy, or after ``max_shots``.
+
+    ``radiosity`` and ``unshot`` (both or neither) continue from an earlier state instead of B = ΔB = E
+    (bench/adaptive.py does, after refining the elements); ``shot`` in the result is what each patch
+    shot in this call, summed: the shots are linear, so B is E plus every patch's ``shot`` gathered over the rows.
     """
     parent = np.asarray(parent)
     a = np.asarray(element_areas, dtype=np.float64)
     n_patches = int(parent.max()) + 1
     patch_area = np.bincount(parent, weights=a, minlength=n_patches)
-    B = np.array(emission, dtype=np.float64)
-    dB = B.copy()
-    emitted = float((np.abs(B).sum(axis=1) * a).sum())
+    if (radiosity is None) != (unshot is None):
+        raise KitError("give both radiosity and unshot to continue a solution, or neither")
+    B = np.array(emission if radiosity is None else radiosity, dtype=np.float64)
+    dB = B.copy() if unshot is None else np.array(unshot, dtype=np.float64)
+    emitted = float((np.abs(np.asarray(emission, dtype=np.float64)).sum(axis=1) * a).sum())
+    total_shot = np.zeros((n_patches, 3))
     max_shots = max_shots or 1000 * n_patches
     members = [np.flatnonzero(parent == p) for p in range(n_patches)]
     energy = np.stack([np.bincount(parent, weights=dB[:, c] * a, minlength=n_patches) for c in range(3)], axis=1)
@@ -111,6 +120,7 @@ def solve_substructured(rows: Any, parent: np.ndarray, element_areas: np.ndarray
     start = time.perf_counter()
     def shoot(p: int) -> None:
         shot = energy[p] / patch_area[p]
+        total_shot[p] += shot
         dB[members[p]] = 0.0
         energy[p] = 0.0
         received = reflectance * (rows.row(p) * (patch_area[p] / a))[:, None] * shot[None, :]
@@ -136,4 +146,4 @@ def solve_substructured(rows: Any, parent: np.ndarray, element_areas: np.ndarray
         break
     residual = float(np.abs(energy).sum() / emitted) if emitted > 0 else 0.0
     return SubstructuredSolution(B, dB, residual <= tolerance * (1 + 1e-9), residual, len(order),
-                                 time.perf_counter() - start, order)
+                                 time.perf_counter() - start, order, total_shot)

@@ -25,6 +25,8 @@ from .handout import for_release
 
 #: What of ``autograder/<stage>/`` a student copy holds: the package marker and the checks (which only compare).
 SHIPPED_SPEC_FILES = ("__init__.py", "checks.py")
+#: A folder beside a handout for the kit's copy only (the bench's figures, which its ``<!-- kit -->`` blocks show).
+KIT_FOLDER = "kit"
 
 WORKFLOW_HEADER = """# Runs the public tests of stage {stage} on every push (GitHub Classroom autograding).
 # Built by `cs451 release {stage}`; the points per task are the public tests' points.
@@ -176,7 +178,7 @@ def build_release(stage: str, output: str | Path, include_reference: tuple[str, 
     handout.write_text(for_release((KIT_ROOT / "assignments" / st.handout / "README.md").read_text(), stage,
                                    f"assignments/{st.handout}/README.md"))
     for extra in (KIT_ROOT / "assignments" / st.handout).iterdir():  # figures beside the handout
-        if extra.name != "README.md":
+        if extra.name not in ("README.md", KIT_FOLDER):
             copy_tree(str(extra.relative_to(KIT_ROOT)), out)
     shutil.copytree(starter, out / stage, ignore=LITTER)
     for earlier in include_reference:
