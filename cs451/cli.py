@@ -108,7 +108,10 @@ def _cmd_demo(a: argparse.Namespace) -> int:
     from .demos import run_demo
     window = True if a.window else (False if a.no_window else None)
     from .copy import default_impl
-    paths = run_demo(stage=a.stage, impl=a.impl or default_impl(), output=a.output, window=window, frames=a.frames)
+    paths = run_demo(stage=a.stage, impl=a.impl or default_impl(), output=a.output, window=window, frames=a.frames,
+                     scene=a.scene, size=a.size, screenshot=a.screenshot)
+    if a.screenshot:
+        print(f"wrote {a.screenshot} (the window, as the display shows it)")
     for p in paths:
         print(f"wrote {p}")
     if paths:
@@ -219,13 +222,20 @@ def build_parser() -> argparse.ArgumentParser:
         g.add_argument("--roster", help="grade every submission folder inside this folder (one per student)")
     g.set_defaults(func=_cmd_grade, roster=None)
 
-    d = sub.add_parser("demo", help="the lecture demo: a window, or images without a display", description="Run a stage's demo.")
+    from .demos.controls import help_text
+    d = sub.add_parser("demo", help="the lecture demo: a window, or images without a display", description="Run a stage's demo.",
+                       epilog=help_text(stages), formatter_class=argparse.RawDescriptionHelpFormatter)
     d.add_argument("stage", choices=stages)
     d.add_argument("--impl", help=f"a folder holding the stage's package (default: {yours})")
     d.add_argument("-o", "--output", default="demo", help="folder for the images when there is no display (default: demo)")
     d.add_argument("--window", action="store_true", help="open a window even if no display is detected")
     d.add_argument("--no-window", action="store_true", help="write images even if there is a display")
-    d.add_argument("--frames", type=int, help="close the window after this many frames (for scripted demos)")
+    d.add_argument("--frames", type=int, help="close the window after this many frames (for scripted demos); "
+                                             "without a window (whitted, hemicube), write only the first that many")
+    d.add_argument("--scene", help="whitted, hemicube: a bundled scene or scene file (default: whitted, cornell-box)")
+    d.add_argument("--size", help="whitted, hemicube: WIDTHxHEIGHT of the picture, overriding the scene's")
+    d.add_argument("--screenshot", help="whitted, hemicube: in the window, play the frames' script, save the window "
+                                        "as the display shows it to this PNG, and close")
     d.set_defaults(func=_cmd_demo)
 
     sc = sub.add_parser("scenes", help="list the bundled scenes", description="List the bundled scenes.")

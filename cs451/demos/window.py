@@ -1,18 +1,44 @@
 """The demos' window: GLFW, an OpenGL 3.3 core context for moderngl, key names, and a frame count.
 
 One window class for every stage: the sphere's (the notes' 500×500 window, resizable)
-and the radiosity and ray tracing demos' alike. Keys arrive as names (``"q"``, ``"+"``,
-``"escape"``), which is what task S8 and the demos' own controls understand.
+and the radiosity, ray tracing and hemicube demos' alike. Keys arrive as names (``"q"``, ``"+"``,
+``"escape"``), which is what task S8 and the demos' own controls understand. A demo that makes
+its frames as images (:mod:`.player`) has them drawn by :meth:`Window.blit`, scaled to the window
+and letterboxed, and gets its clicks back in the frame's own pixels (:meth:`Window.frame_point`).
 """
 from __future__ import annotations
 
+import os
+import sys
+import time
+from pathlib import Path
 from typing import Any, Callable
+
+import numpy as np
 
 from ..errors import KitError
 
 #: GLFW key codes with no printable name, as the kit names them (S8's table).
 SPECIAL_KEYS = {"ESCAPE": "escape", "EQUAL": "+", "KP_ADD": "+", "MINUS": "-", "KP_SUBTRACT": "-",
                 "LEFT": "left", "RIGHT": "right", "UP": "up", "DOWN": "down", "SPACE": "space"}
+
+#: Draws a frame (an RGB8 texture) pixel for pixel: each window pixel takes the frame pixel it falls in.
+BLIT_VERTEX = """#version 330
+in vec2 in_corner;
+void main() { gl_Position = vec4(in_corner, 0.0, 1.0); }
+"""
+BLIT_FRAGMENT = """#version 330
+uniform sampler2D u_frame;
+uniform vec2 u_origin;     // the frame's lower left corner in window pixels
+uniform float u_scale;     // window pixels per frame pixel
+out vec4 colour;
+void main() {
+    ivec2 size = textureSize(u_frame, 0);
+    ivec2 p = ivec2(floor((gl_FragCoord.xy - u_origin) / u_scale));
+    p = clamp(p, ivec2(0), size - 1);
+    colour = vec4(texelFetch(u_frame, ivec2(p.x, size.y - 1 - p.y), 0).rgb, 1.0);   // image rows run top down
+}
+"""
 
 
 class Window:
@@ -47,6 +73,8 @@ class Window:
         glfw.set_mouse_button_callback(self.win, self._on_click)
         self.frames = 0
         self.closed = False
+        self._blit: Any = None                 # program, quad and texture, made at the first blit
+        self._placed: tuple[int, int, int, int, float] | None = None   # where the last frame went (x, y, w, h, scale)
 
     def _on_key(self, _win: Any, key: int, _scancode: int, action: int, _mods: int) -> None:
         if action != self.glfw.PRESS:
@@ -78,8 +106,84 @@ class Window:
         """The framebuffer's size in pixels (it may differ from the window's on high-DPI screens)."""
         return tuple(self.glfw.get_framebuffer_size(self.win))  # type: ignore[return-value]
 
+    def frame_point(self, x: float, y: float) -> tuple[int, int] | None:
+        """A click at window position (x, y) as a pixel (column, row) of the last blitted frame; None outside it."""
+        if self._placed is None:
+            return None
+        wx, wy = self.glfw.get_window_size(self.win)
+        fw, fh = self.size()
+        sx, sy = fw / max(wx, 1), fh / max(wy, 1)                 # window units to framebuffer pixels (high DPI)
+        left, bottom, w, h, scale = self._placed
+        col = int((x * sx - left) // scale)
+        row = int((y * sy - (fh - bottom - h * scale)) // scale)
+        return (col, row) if 0 <= col < w and 0 <= row < h else None
+
+    def blit(self, frame: np.ndarray) -> None:
+        """Draw a uint8 RGB frame (h, w, 3) as large as the window allows, its shape kept (whole multiples when it
+        fits at least once, so pixels stay square and sharp), on a dark background."""
+        ctx = self.ctx
+        h, w = frame.shape[:2]
+        if self._blit is None:
+            program = ctx.program(vertex_shader=BLIT_VERTEX, fragment_shader=BLIT_FRAGMENT)
+            quad = ctx.buffer(np.array([-1, -1, 1, -1, -1, 1, 1, 1], dtype="f4").tobytes())
+            self._blit = [program, ctx.vertex_array(program, [(quad, "2f", "in_corner")]), None, None]
+        program, vao, texture, shown = self._blit
+        if texture is None or texture.size != (w, h):
+            if texture is not None:
+                texture.release()
+            texture = ctx.texture((w, h), 3, dtype="f1", alignment=1)
+            texture.filter = (ctx.NEAREST, ctx.NEAREST)
+            shown = None
+        if shown is not frame:                             # the same frame again: no upload
+            texture.write(np.ascontiguousarray(frame[..., :3], dtype=np.uint8).tobytes())
+        self._blit[2:] = [texture, frame]
+        fw, fh = self.size()
+        scale = min(fw / w, fh / h)
+        scale = float(int(scale)) if scale >= 1 else scale
+        left, bottom = int((fw - w * scale) // 2), int((fh - h * scale) // 2)
+        self._placed = (left, bottom, w, h, scale)
+        ctx.viewport = (0, 0, fw, fh)
+        ctx.clear(0.1, 0.1, 0.1)
+        ctx.viewport = (left, bottom, int(round(w * scale)), int(round(h * scale)))
+        texture.use(location=0)
+        program["u_frame"].value = 0
+        program["u_origin"].value = (float(left), float(bottom))
+        program["u_scale"].value = scale
+        vao.render(ctx.TRIANGLE_STRIP)
+
+    def wait(self, seconds: float) -> None:
+        """Sleep until an event arrives or ``seconds`` pass (an idle demo leaves the CPU alone)."""
+        self.glfw.wait_events_timeout(seconds)
+
+    def screenshot(self, path: str | Path) -> Path:
+        """The window as the display shows it, as a PNG: grabbed from the X server where there is one (what a
+        viewer sees, not what the program meant to draw), else read back from the framebuffer."""
+        from PIL import Image
+        self.ctx.finish()
+        for _ in range(3):                                  # let the server take the last swap
+            self.glfw.poll_events()
+            time.sleep(0.1)
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        image = None
+        if sys.platform.startswith("linux") and os.environ.get("DISPLAY"):
+            from PIL import ImageGrab
+            x, y = self.glfw.get_window_pos(self.win)
+            w, h = self.glfw.get_window_size(self.win)
+            try:
+                image = ImageGrab.grab(bbox=(x, y, x + w, y + h), xdisplay=os.environ["DISPLAY"]).convert("RGB")
+            except OSError:
+                image = None
+        if image is None:
+            fw, fh = self.size()
+            data = np.frombuffer(self.ctx.screen.read(viewport=(0, 0, fw, fh), components=3), dtype=np.uint8)
+            image = Image.fromarray(np.flipud(data.reshape(fh, fw, 3)))
+        image.save(path)
+        return path
+
     def show(self, draw: Callable[[], Any]) -> None:
         """Draw one frame into the window and swap it in."""
+        self.glfw.make_context_current(self.win)   # an engine may have made its own context current since
         self.ctx.screen.use()
         draw()
         self.glfw.swap_buffers(self.win)

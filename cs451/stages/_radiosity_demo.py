@@ -1,7 +1,7 @@
 """Stage 4's demo: B beside B + ρ·ambient as the shots go by, in a window or as captioned frames and a GIF.
 
-Everything goes through the stage interface (the submission's R1, R3, R4 and R5), the shared
-window (:mod:`cs451.demos.window`) and frame writer (:mod:`cs451.demos.frames`). The window
+Everything goes through the stage interface (the submission's R1, R3, R4 and R5) and the shared
+screen (:class:`cs451.demos.player.Screen`: the window or the frames and GIF, q and --frames). The window
 shows what the frames show: the scene's exposure and encoding (sRGB for the Cornell box) are
 applied as the panels are drawn, not left linear. A scene with glossy materials (``glossy-box``) shows their
 highlight (:mod:`cs451.specular`) on both panels, as ``cs451 render`` does.
@@ -14,8 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from ..demos.frames import write_frames
-from ..demos.window import Window
+from ..demos.player import Closed, Screen
 from ..drawing import GouraudDrawer, camera_matrix, with_highlight
 from ..imageio import to_uint8
 from ..scene import load_scene
@@ -26,10 +25,6 @@ def demo_shots(total_hint: int, frames: int | None) -> list[int]:
     """Shots after which to show a frame: 0, 1, 2, 4, 8, … (the picture changes fastest early on)."""
     shots = [0] + [2 ** k for k in range(0, 40) if 2 ** k <= max(total_hint, 1)]
     return shots[:frames] if frames else shots
-
-
-class _Stop(Exception):
-    """The window was closed, or showed its frames."""
 
 
 def demo(module: Any, output: Path, window: bool, frames: int | None, scene_name: str = "cornell-box",
@@ -43,14 +38,14 @@ def demo(module: Any, output: Path, window: bool, frames: int | None, scene_name
     width, height = size
     mvp = camera_matrix(scene, width, height, R.camera_view(scene))
     a, rho = patches.areas, patches.reflectance
-    win = Window(2 * width, height, "cs451 radiosity: B | B + ambient (q quits)") if window else None
-    drawer = GouraudDrawer(win.ctx if win else None)
+    screen = Screen("radiosity", "cs451 radiosity: B | B + ambient", (2 * width, height), window=window,
+                    frames=frames, output=output)
+    win = screen.win
+    drawer = GouraudDrawer(screen.ctx)
     rows = R.hemicube_formfactors(patches.quads, opts.resolution, opts.proximity, ctx=drawer.ctx, batch=R.ROWS_PER_BATCH)
     encoding = (scene.image.exposure, scene.image.srgb)
     gloss = R.glossy.highlight(scene, patches, opts.specular_samples) if opts.specular else None
     gloss = gloss.scaled(opts.exposure) if gloss is not None else None     # the highlight on both panels
-    pictures: list[np.ndarray] = []
-    captions: list[str] = []
 
     def panels(B: np.ndarray, dB: np.ndarray) -> list[np.ndarray]:
         out = []
@@ -70,29 +65,24 @@ def demo(module: Any, output: Path, window: bool, frames: int | None, scene_name
 
     def show(shots: int, B: np.ndarray, dB: np.ndarray, last: bool = False) -> None:
         if win is None:
-            pictures.append(np.hstack(panels(B, dB)))
-            captions.append(f"{'the answer: ' if last else ''}{shots} shots — left: B, right: B + ρ·ambient")
-            return
-        win.keys()
-        win.show(lambda: panels(B, dB))
-        if win.done(frames):
-            raise _Stop
+            screen.show(to_uint8(np.hstack(panels(B, dB)), *encoding),
+                        f"{'the answer: ' if last else ''}{shots} shots — left: B, right: B + ρ·ambient")
+        else:
+            screen.show(draw=lambda: panels(B, dB))      # raises Closed: q, closed, or --frames shown
 
-    try:
+    try:                                            # between frames, each shot polls the window: q still quits
         show(0, patches.emission.copy(), patches.emission.copy())
         sol = R.solve_progressive(module, rows, a, rho, patches.emission, opts.tolerance, opts.max_shots, opts.overshoot,
-                                  True, lambda shots, i, B, dB: show(shots, B, dB) if shots in wanted else None,
+                                  True, lambda shots, i, B, dB: show(shots, B, dB) if shots in wanted else screen.events(),
                                   rows_ahead=R.ROWS_PER_BATCH - 1)
         if win is None:
             show(len(sol.order), sol.radiosity, sol.unshot, last=True)
         else:                                       # the answer stays up until the window is closed
             while True:
                 show(len(sol.order), sol.radiosity, sol.unshot)
-    except _Stop:
+                screen.wait()                       # idle: sleep until an event, not spin
+    except Closed:
         pass
     finally:
-        if win is not None:
-            win.close()
-    if win is not None:
-        return []
-    return write_frames(output, "radiosity", [to_uint8(p, *encoding) for p in pictures], captions)
+        written = screen.close()
+    return written

@@ -243,7 +243,15 @@ def probe_item_buffer(impl: Any, quads: list, patch: int, resolution: int, **giv
     return {"image": item_buffer_image(ff, int(patch), None, given=given or None)}
 
 
+def demo(module: Any, output: Any, window: bool, frames: int | None, scene: str = "cornell-box",
+         size: tuple[int, int] | None = None, screenshot: Any = None) -> list:
+    """A patch's five views, unfolded item buffer, delta form factors and row painted on the scene
+    (:mod:`cs451.stages._hemicube_demo`)."""
+    from ._hemicube_demo import demo as hemicube_demo  # GLFW and the window loop load only for a demo
+    return hemicube_demo(module, output, window, frames, scene=scene, size=size, screenshot=screenshot)
+
+
 STAGE = Stage(
     name="hemicube", number=3, title="Hemi-cube form factors", handout="03-hemicube", tasks=TASKS, render=render,
-    probes=PROBES, options_type=HemicubeOptions, draws=(Polygon, AreaLight), estimate=estimate,
+    probes=PROBES, demo=demo, options_type=HemicubeOptions, draws=(Polygon, AreaLight), estimate=estimate,
 )

@@ -399,8 +399,15 @@ def probe_render(impl: Any, scene: dict, size: list[int], origins: np.ndarray | 
     return out
 
 
+def demo(module: Any, output: Any, window: bool, frames: int | None, scene: str = "whitted",
+         size: tuple[int, int] | None = None, screenshot: Any = None) -> list:
+    """The tracer refining in a window, its switches and a pixel's ray tree (:mod:`cs451.stages._whitted_demo`)."""
+    from ._whitted_demo import demo as whitted_demo  # GLFW and the window loop load only for a demo
+    return whitted_demo(module, output, window, frames, scene=scene, size=size, screenshot=screenshot)
+
+
 STAGE = Stage(
     name="whitted", number=2, title="Whitted ray tracing", handout="02-whitted", tasks=TASKS, render=render,
-    probes=PROBES, options_type=WhittedOptions, draws=(Sphere, Plane, Polygon, Mesh, PointLight, AreaLight),
+    probes=PROBES, demo=demo, options_type=WhittedOptions, draws=(Sphere, Plane, Polygon, Mesh, PointLight, AreaLight),
     estimate=estimate,
 )

@@ -1,0 +1,466 @@
+"""Stage 2's demo: the ray tracer refining in a window, switches for what it traces, and one pixel's ray tree.
+
+Everything the submission computes is reached through the stage interface, every answer
+checked: its camera rays (W1), its hierarchy (W4, through :func:`~cs451.stages.whitted.prepare`)
+and its recursion (W11). The switches change what W11 is handed, never its code:
+
+- shadows off: while it runs, its W7 is answered "all the light gets through"
+  (:func:`~cs451.stages.base.functions_replaced`), so it casts no shadow rays;
+- reflection off: every reflectance is 0 and Fresnel's term is dropped (total internal
+  reflection still reflects: glass cannot refract there);
+- refraction off: every transmittance is 0 (glass turns opaque, and casts a full shadow);
+- the cut-off off: β = 0, so every ray goes on to the depth limit; ``+`` and ``-`` move that limit.
+
+The picture refines coarse to fine: one pixel in every 16 × 16 block first (painted over its
+block), then every 8th, 4th, 2nd pixel and the rest, each pixel traced once, in pieces of at
+most :data:`PIECE_RAYS` rays between frames. A finished picture is kept per setting, so
+switching back is instant.
+
+A pixel's ray tree is what the submission's own W11 asks its W5 (closest hits) and W7 (shadow
+rays) while it traces that pixel's camera ray, recorded as it goes: the kit draws the tree, it
+does not trace it (the recursion is task W11's answer, and the engine ships to students). A
+secondary ray's parent is the hit its origin leaves from; it is a reflection when it leaves
+on the side the parent ray came from, a refraction otherwise. The tree is drawn through a
+pinhole fitted to the submission's own camera rays (the kit writes no look-at of its own).
+
+Two imports of the submission: one answers W1 once for the whole image; the other traces, in
+small pieces only, so every piece takes the submission's path for small batches, where its
+W11 calls its W5 and W7. (The reference hands any batch to compiled kernels, which call
+neither, once it has seen a large one, and a whole image's camera rays are one.)
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from contextlib import AbstractContextManager, nullcontext
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+from typing import Any, Callable
+
+import numpy as np
+
+from .. import raytrace
+from ..demos.frames import captioned
+from ..demos.player import Event, play
+from ..imageio import to_uint8
+from ..impl import load_impl
+from ..scene import Sphere, load_scene
+from . import whitted as W
+from .base import functions_replaced
+
+#: The most rays one piece hands to W11: a frame's worth of work on a slow submission, and a "small batch"
+#: to any submission (the reference's compiled path starts at 10,000).
+PIECE_RAYS = 4096
+#: Frames are at least this wide: a small image is shown with each pixel as a square of pixels.
+MIN_FRAME_WIDTH = 640
+#: Block size of the first, coarsest pass (one pixel traced per block).
+FIRST_BLOCK = 16
+
+#: Colours of the ray tree, by kind of ray, and of shadow rays by how much light they let through.
+RAY_COLOURS = {"camera": (255, 255, 255), "reflection": (0, 225, 255), "refraction": (255, 80, 255),
+               "ray": (210, 210, 210)}
+SHADOW_COLOURS = {"lit": (80, 255, 80), "dimmed": (255, 170, 30), "blocked": (255, 40, 40)}
+LEGEND = "tree: cyan reflected | magenta refracted | shadow rays: green lit, orange through glass, red blocked"
+
+
+@dataclass(frozen=True)
+class Settings:
+    """What the picture traces: the switches and the depth limit."""
+    shadows: bool = True
+    reflection: bool = True
+    refraction: bool = True
+    cutoff: bool = True
+    depth: int = 5
+
+
+@dataclass
+class _Render:
+    """A picture refining under one setting: the scene it traces (with its counters), the image, how far it got."""
+    scene: raytrace.TraceScene
+    image: np.ndarray
+    pos: int = 0
+    level: int = 0
+
+
+@dataclass
+class _Ray:
+    kind: str                      # camera, reflection, refraction, ray (no parent found)
+    start: np.ndarray
+    end: np.ndarray                # the hit, or a scene's length along a miss
+    hit: bool
+    parent: int | None
+
+
+@dataclass
+class RayTree:
+    """One pixel's rays as the submission's W11 cast them: its W5 queries (rays) and W7 queries (shadow rays)."""
+    pixel: tuple[int, int]
+    rays: list[_Ray]
+    shadows: list[tuple[np.ndarray, np.ndarray, float]]      # origin, light sample, light let through (max RGB)
+    counters: dict[str, int]                                 # W11's own counters for this one camera ray
+
+    def count(self, kind: str) -> int:
+        return sum(r.kind == kind for r in self.rays)
+
+    def shadow_state(self, passed: float) -> str:
+        return "blocked" if passed <= 1e-9 else ("lit" if passed >= 1 - 1e-9 else "dimmed")
+
+    def summary(self) -> list[str]:
+        """Two caption lines: the tree as drawn, and what the submission's W11 counted for this camera ray."""
+        blocked = sum(self.shadow_state(p) == "blocked" for _, _, p in self.shadows)
+        hits = sum(r.hit for r in self.rays)
+        c = self.counters
+        return [f"pixel ({self.pixel[0]}, {self.pixel[1]}): {self.count('reflection')} reflected, "
+                f"{self.count('refraction')} refracted, {len(self.shadows)} shadow rays ({blocked} blocked), {hits} hits",
+                f"W11's counters for it: {c.get('camera', 0)} camera, {c.get('reflection', 0)} reflection, "
+                f"{c.get('transmission', 0)} transmission, {c.get('shadow', 0)} shadow"]
+
+
+class Pinhole:
+    """Where world points land in the image: a homography of directions fitted to the submission's camera rays."""
+
+    def __init__(self, origins: np.ndarray, directions: np.ndarray, width: int, height: int, k: int):
+        cols, rows = (np.unique(np.linspace(0, n * k - 1, 7).round().astype(int)) for n in (width, height))
+        idx = (rows[:, None] * width * k + cols[None, :]).ravel()
+        d = directions[idx]
+        u = np.tile((cols + 0.5) / k / width, len(rows))             # in image widths and heights: well conditioned
+        v = np.repeat((rows + 0.5) / k / height, len(cols))
+        zero = np.zeros_like(d)
+        a = np.concatenate([np.hstack([d, zero, -u[:, None] * d]), np.hstack([zero, d, -v[:, None] * d])])
+        m = np.linalg.svd(a)[2][-1].reshape(3, 3)
+        if (m @ d[0])[2] < 0:
+            m = -m
+        self.m, self.width, self.height = m, width, height
+        self.eye = origins.mean(axis=0)
+        q = d @ m.T
+        with np.errstate(divide="ignore", invalid="ignore"):
+            err = np.hypot(q[:, 0] / q[:, 2] - u, q[:, 1] / q[:, 2] - v) * max(width, height)
+        spread = float(np.ptp(origins, axis=0).max())
+        #: whether the camera rays are a pinhole's (one eye, directions through a plane): else no tree is drawn
+        self.ok = bool(np.all(q[:, 2] > 0) and np.nanmax(err) < 0.05 and spread <= 1e-9 * (1 + np.abs(self.eye).max()))
+
+    def segment(self, a: np.ndarray, b: np.ndarray) -> tuple[tuple[float, float], tuple[float, float]] | None:
+        """The part of segment a-b in front of the eye, in image pixels (x right, y down), clipped near the image."""
+        qa, qb = self.m @ (a - self.eye), self.m @ (b - self.eye)
+        eps = 1e-9 * max(np.abs(qa).max(), np.abs(qb).max(), 1e-300)
+        if qa[2] < eps and qb[2] < eps:
+            return None
+        if qa[2] < eps:
+            qa = qa + (eps - qa[2]) / (qb[2] - qa[2]) * (qb - qa)
+        elif qb[2] < eps:
+            qb = qb + (eps - qb[2]) / (qa[2] - qb[2]) * (qa - qb)
+        scale = np.array([self.width, self.height])
+        return _clip(qa[:2] / qa[2] * scale, qb[:2] / qb[2] * scale, self.width, self.height)
+
+    def point(self, p: np.ndarray) -> tuple[float, float] | None:
+        q = self.m @ (np.asarray(p, float) - self.eye)
+        return (q[0] / q[2] * self.width, q[1] / q[2] * self.height) if q[2] > 0 else None
+
+
+def _clip(a: np.ndarray, b: np.ndarray, width: int, height: int) -> tuple[tuple[float, float], tuple[float, float]] | None:
+    """Liang-Barsky: segment a-b cut to a margin around the image (Pillow draws nothing sensible far outside it)."""
+    lo, hi = np.array([-2.0 * width, -2.0 * height]), np.array([3.0 * width, 3.0 * height])
+    t0, t1, d = 0.0, 1.0, b - a
+    for axis in range(2):
+        for p, q in ((-d[axis], a[axis] - lo[axis]), (d[axis], hi[axis] - a[axis])):
+            if p == 0:
+                if q < 0:
+                    return None
+                continue
+            t = q / p
+            if p < 0:
+                t0 = max(t0, t)
+            else:
+                t1 = min(t1, t)
+    if t0 > t1:
+        return None
+    s, e = a + t0 * d, a + t1 * d
+    return (float(s[0]), float(s[1])), (float(e[0]), float(e[1]))
+
+
+def progressive_order(width: int, height: int) -> tuple[np.ndarray, list[int], list[int]]:
+    """Pixel numbers (row by row from the top left) coarse to fine, each once: every b-th pixel of every b-th row
+    for b = 16 (or less on a small image), 8, 4, 2, 1; with each pass's end in that order and its block size."""
+    b = 1
+    while b * 2 <= min(FIRST_BLOCK, max(1, min(width, height) // 4)):
+        b *= 2
+    taken = np.zeros((height, width), bool)
+    order, ends, blocks = [], [], []
+    while b >= 1:
+        ys, xs = np.mgrid[0:height:b, 0:width:b]
+        new = ~taken[ys, xs]
+        order.append((ys * width + xs)[new])
+        taken[ys, xs] = True
+        ends.append(sum(len(o) for o in order))
+        blocks.append(b)
+        b //= 2
+    return np.concatenate(order), ends, blocks
+
+
+def _all_light(scene: Any, origins: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """W7's answer with shadows off: every light sample reaches every point, and no shadow ray is cast."""
+    return np.ones((len(np.asarray(origins)), 3))
+
+
+def _recorded(own: Callable, log: list, columns: tuple[int, ...]) -> Callable:
+    """``own`` (W5 or W7), recording each call's rays and answers where they have the interface's shapes."""
+    def recording(scene: Any, origins: Any, second: Any) -> Any:
+        out = own(scene, origins, second)
+        try:
+            parts = [np.array(origins, dtype=np.float64), np.array(second, dtype=np.float64)]
+            parts += [np.array(v, dtype=np.float64) for v in (out if isinstance(out, (tuple, list)) else (out,))]
+            n = len(parts[0])
+            if len(parts) == len(columns) and all(p.shape == ((n, c) if c else (n,)) for p, c in zip(parts, columns)):
+                log.append(parts)
+        except (TypeError, ValueError):
+            pass                        # not the interface's shapes: W11's own checks say what is wrong
+        return out
+    return recording
+
+
+class WhittedDemo:
+    """The demo's state: the camera rays, one refining picture per setting, and the ray tree shown."""
+    name = "whitted"
+
+    def __init__(self, module: ModuleType, scene: str | Path = "whitted", size: tuple[int, int] | None = None):
+        self.scene = load_scene(scene)
+        W.STAGE.check_scene(self.scene)
+        self.opts = W.STAGE.options(self.scene)
+        self.width, self.height = size or (self.scene.image.width, self.scene.image.height)
+        W.STAGE.check_cost(self.scene, (self.width, self.height))
+        self.title = f"cs451 whitted: {self.scene.name}"
+        self.k = math.isqrt(self.opts.spp)
+        self.zoom = max(1, math.ceil(MIN_FRAME_WIDTH / self.width))
+        self.origins, self.directions = W.STAGE.call(module, "W1", self.scene.camera, self.width * self.k,
+                                                     self.height * self.k)
+        self.camera = Pinhole(self.origins, self.directions, self.width, self.height, self.k)
+        self.tracer = load_impl(Path(module.__file__).parent, "whitted", copy="pieces")
+        self.base = W.prepare(self.scene, self.tracer)
+        self.order, self.ends, self.blocks = progressive_order(self.width, self.height)
+        wk = self.width * self.k
+        self.first_ray = (self.order // self.width) * self.k * wk + (self.order % self.width) * self.k
+        self.sub_rays = (np.arange(self.k)[:, None] * wk + np.arange(self.k)[None, :]).ravel()
+        self.reach = float(np.linalg.norm(np.subtract(self.scene.camera.center, self.scene.camera.eye))) + 1.0
+        self.piece = max(1, 256 // self.k ** 2)
+        self.settings = Settings(depth=self.opts.max_depth)
+        self.renders: dict[Settings, _Render] = {}
+        self.tree: RayTree | None = None
+        self._frame: np.ndarray | None = None
+        self._use(self.settings)
+
+    # --- the player's interface ---------------------------------------------------------------
+    def frame_size(self) -> tuple[int, int]:
+        return tuple(self.frame().shape[1::-1])   # type: ignore[return-value]
+
+    def start(self, ctx: Any) -> None:
+        """Nothing to make: the tracer runs on the CPU and frames are images."""
+
+    def busy(self) -> bool:
+        return self.render.pos < len(self.order)
+
+    def handle(self, event: Event) -> None:
+        if event[0] == "click":
+            x, y = int(event[1]) // self.zoom, int(event[2]) // self.zoom
+            if 0 <= x < self.width and 0 <= y < self.height:
+                self.tree = self.ray_tree(x, y)
+                self._frame = None
+            return
+        key, s = event[1], self.settings
+        changes = {"s": {"shadows": not s.shadows}, "r": {"reflection": not s.reflection},
+                   "t": {"refraction": not s.refraction}, "c": {"cutoff": not s.cutoff},
+                   "+": {"depth": min(s.depth + 1, W.MAX_DEPTH)}, "-": {"depth": max(s.depth - 1, 0)}}
+        if key == "x":
+            self.tree, self._frame = None, None
+        elif key in changes:
+            self._use(dataclasses.replace(s, **changes[key]))
+            if self.tree is not None:
+                self.tree = self.ray_tree(*self.tree.pixel)
+
+    def step(self, seconds: float) -> bool:
+        r, stop = self.render, time.perf_counter() + seconds
+        while r.pos < len(self.order):
+            end = self.ends[r.level]
+            n = min(self.piece, end - r.pos)
+            started = time.perf_counter()
+            self._trace(r, self.order[r.pos:r.pos + n], self.first_ray[r.pos:r.pos + n], self.blocks[r.level])
+            took = time.perf_counter() - started
+            self.piece = int(np.clip(n * 0.5 * seconds / max(took, 1e-4), 16, PIECE_RAYS // self.k ** 2))
+            r.pos += n
+            self._frame = None
+            if r.pos == end:
+                r.level += 1
+                return True
+            if time.perf_counter() >= stop:
+                break
+        return False
+
+    def frame(self) -> np.ndarray:
+        if self._frame is None:
+            r, z = self.render, self.zoom
+            image = to_uint8(r.image, self.scene.image.exposure, self.scene.image.srgb)
+            image = np.repeat(np.repeat(image, z, axis=0), z, axis=1)
+            if self.tree is not None:
+                image = self._draw_tree(image, self.tree)
+            self._frame = captioned(image, "\n".join(self._caption()))
+        return self._frame
+
+    def script(self) -> list[list[Event]]:
+        """Refine; click the default pixel; shadows, reflection, refraction and the cut-off off in turn; all back on."""
+        x, y = self.default_pixel()
+        click = ("click", x * self.zoom + self.zoom // 2, y * self.zoom + self.zoom // 2)
+        k = [("key", c) for c in "ssrrttcc"]
+        return [[], [click], [k[0]], [k[1], k[2]], [k[3], k[4]], [k[5], k[6]], [k[7], ("key", "x")]]
+
+    # --- the picture ----------------------------------------------------------------------------
+    def _use(self, settings: Settings) -> None:
+        self.settings = settings
+        if settings not in self.renders:
+            if len(self.renders) >= 16:
+                self.renders.pop(next(iter(self.renders)))
+            self.renders[settings] = _Render(self.scene_for(settings), np.zeros((self.height, self.width, 3)))
+        self.render = self.renders[settings]
+        self._frame = None
+
+    def scene_for(self, s: Settings) -> raytrace.TraceScene:
+        """The traced scene under ``s``: materials and limits changed, the geometry and hierarchy shared, counters 0."""
+        ts = dataclasses.replace(self.base, max_depth=s.depth, min_weight=self.opts.min_weight if s.cutoff else 0.0,
+                                 counters={k: 0 for k in raytrace.COUNTERS})
+        if not s.reflection:
+            ts.mat_reflectance = np.zeros_like(ts.mat_reflectance)
+            ts.mat_fresnel = np.zeros_like(ts.mat_fresnel)
+        if not s.refraction:
+            ts.mat_transmittance = np.zeros_like(ts.mat_transmittance)
+        return ts
+
+    def _switched(self, s: Settings, extra: dict[str, Callable] | None = None) -> AbstractContextManager:
+        wrappers = dict(extra or {})
+        if not s.shadows:
+            wrappers["W7"] = lambda own: _all_light
+        return functions_replaced(W.STAGE, self.tracer, wrappers) if wrappers else nullcontext()
+
+    def _trace(self, r: _Render, pixels: np.ndarray, first: np.ndarray, block: int) -> None:
+        rays = (first[:, None] + self.sub_rays[None, :]).ravel()
+        with self._switched(self.settings):
+            colours = W.STAGE.call(self.tracer, "W11", r.scene, self.origins[rays], self.directions[rays])
+        colours = colours.reshape(len(pixels), self.k ** 2, 3).mean(axis=1)
+        y, x = np.divmod(pixels, self.width)
+        for dy in range(block):          # each pixel paints its block until finer passes fill it in
+            for dx in range(block):
+                r.image[np.minimum(y + dy, self.height - 1), np.minimum(x + dx, self.width - 1)] = colours
+
+    def image(self) -> np.ndarray:
+        """The current picture, linear (h, w, 3): the finished render once :meth:`busy` is False."""
+        return self.render.image
+
+    # --- one pixel's ray tree -------------------------------------------------------------------
+    def ray_tree(self, x: int, y: int) -> RayTree:
+        """Trace pixel (x, y)'s camera ray (its middle sample) with the submission's W11, recording its W5 and W7."""
+        ray = (y * self.k + self.k // 2) * self.width * self.k + x * self.k + self.k // 2
+        hits: list[list[np.ndarray]] = []
+        shadows: list[list[np.ndarray]] = []
+        extra = {"W5": lambda own: _recorded(own, hits, (3, 3, 0, 0, 3))}
+        if self.settings.shadows:
+            extra["W7"] = lambda own: _recorded(own, shadows, (3, 3, 3))
+        ts = self.scene_for(self.settings)
+        with self._switched(self.settings, extra):
+            W.STAGE.call(self.tracer, "W11", ts, self.origins[ray:ray + 1], self.directions[ray:ray + 1])
+        rays = self._rays(hits)
+        lights = [(o, target, float(np.max(through))) for call in shadows for o, target, through in zip(*call)]
+        self._frame = None
+        return RayTree((x, y), rays, lights, dict(ts.counters))
+
+    def _rays(self, calls: list[list[np.ndarray]]) -> list[_Ray]:
+        rays: list[_Ray] = []
+        points: list[np.ndarray] = []           # hit points so far, with their ray, normal and direction
+        owners: list[tuple[int, np.ndarray, np.ndarray]] = []
+        for number, (o, d, t, prim, normals) in enumerate(calls):
+            found = []
+            for j in range(len(o)):
+                parent, kind = None, "camera" if number == 0 else "ray"
+                if points:
+                    dist = np.linalg.norm(np.asarray(points) - o[j], axis=1)
+                    best = int(np.argmin(dist))
+                    if dist[best] <= 1e-3 * (1.0 + np.abs(o[j]).max()):
+                        parent = owners[best][0]
+                        n, incoming = owners[best][1], owners[best][2]
+                        kind = "reflection" if (d[j] @ n) * (incoming @ n) < 0 else "refraction"
+                hit = bool(np.isfinite(t[j]) and prim[j] >= 0)
+                end = o[j] + (t[j] if hit else self.reach) * d[j]
+                rays.append(_Ray(kind, o[j], end, hit, parent))
+                if hit:
+                    found.append((end, (len(rays) - 1, normals[j], d[j])))
+            points += [p for p, _ in found]
+            owners += [owner for _, owner in found]
+        return rays
+
+    def _draw_tree(self, image: np.ndarray, tree: RayTree) -> np.ndarray:
+        from PIL import Image, ImageDraw
+        z = self.zoom
+        picture = Image.fromarray(image)
+        draw = ImageDraw.Draw(picture)
+        x, y = tree.pixel
+        draw.rectangle((x * z - 3, y * z - 3, (x + 1) * z + 2, (y + 1) * z + 2), outline=(255, 255, 255), width=2)
+        if not self.camera.ok:
+            return np.asarray(picture)
+
+        def line(a: np.ndarray, b: np.ndarray, colour: tuple[int, int, int], width: int) -> None:
+            seg = self.camera.segment(a, b)
+            if seg is not None:
+                (x0, y0), (x1, y1) = seg
+                pts = [(x0 * z, y0 * z), (x1 * z, y1 * z)]
+                draw.line(pts, fill=(0, 0, 0), width=width + 2)
+                draw.line(pts, fill=colour, width=width)
+
+        for start, target, passed in tree.shadows:
+            line(start, target, SHADOW_COLOURS[tree.shadow_state(passed)], 2)
+        for ray in tree.rays:
+            if ray.kind != "camera":
+                line(ray.start, ray.end, RAY_COLOURS[ray.kind], 3)
+        for ray in tree.rays:
+            p = self.camera.point(ray.end) if ray.hit else None
+            if p is not None:
+                px, py = p[0] * z, p[1] * z
+                draw.ellipse((px - 4, py - 4, px + 4, py + 4), fill=RAY_COLOURS[ray.kind], outline=(0, 0, 0))
+        return np.asarray(picture)
+
+    def default_pixel(self) -> tuple[int, int]:
+        """A pixel with a tree worth showing: beside the middle of the first glass sphere (else a mirror, else the
+        image's middle), off its centre so that the refracted rays bend."""
+        for want in ("mat_transmittance", "mat_reflectance"):
+            for obj in self.scene.objects:
+                if isinstance(obj, Sphere):
+                    index = self.base.material_names.index(obj.material)
+                    if np.any(getattr(self.base, want)[index] > 0):
+                        c, up = np.asarray(obj.center, float), np.asarray(self.scene.camera.up, float)
+                        p, q = self.camera.point(c), self.camera.point(c + obj.radius * up / np.linalg.norm(up))
+                        if p is not None and q is not None:
+                            r = math.hypot(q[0] - p[0], q[1] - p[1])
+                            x, y = int(p[0] - 0.35 * r), int(p[1] - 0.35 * r)
+                            if 0 <= x < self.width and 0 <= y < self.height:
+                                return x, y
+        return self.width // 2, self.height // 2
+
+    def _caption(self) -> list[str]:
+        r, s = self.render, self.settings
+        if r.pos < len(self.order):
+            level = r.level if r.pos > (self.ends[r.level - 1] if r.level else 0) else r.level - 1
+            progress = f"refining: {r.pos / len(self.order):.0%} traced, blocks of {self.blocks[max(level, 0)]} px"
+        else:
+            progress = f"done: {self.width}x{self.height}"
+        switches = (f"shadows {'on' if s.shadows else 'off'}, reflection {'on' if s.reflection else 'off'}, "
+                    f"refraction {'on' if s.refraction else 'off'}, cut-off "
+                    f"{f'β = {self.opts.min_weight:g}' if s.cutoff else 'off'}, depth {s.depth}")
+        c = r.scene.counters
+        rays = (f"rays: {c['camera']:,} camera, {c['reflection']:,} reflection, {c['transmission']:,} transmission, "
+                f"{c['shadow']:,} shadow")
+        tree = self.tree.summary() if self.tree is not None else ["click a pixel: its ray tree", ""]
+        return [f"{progress} — {switches}", rays, *tree, LEGEND]
+
+
+def demo(module: ModuleType, output: Path, window: bool, frames: int | None, scene: str | Path = "whitted",
+         size: tuple[int, int] | None = None, screenshot: Path | None = None) -> list[Path]:
+    """In a window: the picture refining, the switches and a clicked pixel's ray tree. Headless: the script's frames
+    (the refinement, a ray tree, each switch off in turn, all back on) as PNGs and ``whitted.gif``."""
+    return play(WhittedDemo(module, scene, size), window=window, frames=frames, output=output, screenshot=screenshot)
