@@ -19,9 +19,9 @@ from setuptools import setup
 from setuptools.command.build_py import build_py
 
 HERE = Path(__file__).resolve().parent
-#: the kit's folders and files a working install needs, copied as they are (no caches)
-KIT_PARTS = ("reference", "starter", "autograder", "assignments", "bench", "docs", "setup.sh", "pyproject.toml",
-             "README.md")
+#: the kit's folders and files a working install needs (slides/: the decks), copied as they are (no caches)
+KIT_PARTS = ("reference", "starter", "autograder", "assignments", "bench", "docs", "slides", "setup.sh",
+             "pyproject.toml", "README.md")
 LITTER = shutil.ignore_patterns("__pycache__", "*.pyc", ".cs451-cache", "*.egg-info")
 
 

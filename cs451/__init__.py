@@ -9,6 +9,9 @@ __version__ = "0.1.0"
 
 #: The engine's own folder (what the grader copies into a sandbox and a release ships).
 ENGINE_DIR = Path(__file__).resolve().parent
+#: Engine folders only lecturers use (the slides' builder, its vendored reveal.js and KaTeX, the figures it draws
+#: from the reference): never in a student release or a grading sandbox, and not part of the answers' version.
+LECTURER_ONLY = ("slides",)
 
 
 def _kit_root() -> Path:

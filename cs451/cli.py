@@ -119,6 +119,15 @@ def _cmd_demo(a: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_slides(a: argparse.Namespace) -> int:
+    from .slides.build import build_summary, timed_build
+    built, seconds = timed_build(output=a.output, deck=a.deck, cache=a.cache, quick=a.quick)
+    for b in built:
+        print(f"wrote {b.path} ({b.slides} slides, {b.figures} figures, {b.bytes / 1e6:.1f} MB)")
+    print(build_summary(built, seconds) + "; each file opens offline (open it in a browser; ?print-pdf to print)")
+    return 0
+
+
 def _cmd_scenes(a: argparse.Namespace) -> int:
     from .scene import bundled_scenes, load_scene
     for name in bundled_scenes():
@@ -294,6 +303,17 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("-o", "--output", default="bench-results", help="folder for the JSON and plots (default: bench-results)")
     b.add_argument("--quick", action="store_true", help="fewer repetitions")
     b.set_defaults(func=_cmd_bench)
+
+    sl = sub.add_parser("slides", help="build the lecture decks (slides/) into self-contained HTML",
+                        description="Build the decks of slides/ into one HTML file each, with reveal.js, KaTeX and "
+                                    "the reference's figures inside: they open offline.")
+    slsub = sl.add_subparsers(dest="action", required=True, metavar="ACTION")
+    slb = slsub.add_parser("build", help="build one deck or all of them")
+    slb.add_argument("deck", nargs="?", help="overview, sphere, whitted, hemicube or radiosity (default: all)")
+    slb.add_argument("-o", "--output", required=True, help="folder for the HTML files (one per deck)")
+    slb.add_argument("--cache", help="folder for the rendered figures (default: .cs451-cache/slides in the kit)")
+    slb.add_argument("--quick", action="store_true", help="small, fast figures (drafts)")
+    slb.set_defaults(func=_cmd_slides)
     return p
 
 

@@ -44,6 +44,11 @@ def test_the_wheel_carries_the_kit_beside_the_engine_and_no_litter(wheel):
                  "assignments/01-sphere/README.md", "setup.sh", "KIT"):
         assert f"cs451_kit/{part}" in names, part
     assert "cs451/scenes/sphere.json" in names
+    for part in ("slides/templates/deck.html.j2", "slides/templates/deck.js", "slides/vendor/reveal.js/reveal.js",
+                 "slides/vendor/reveal.js/plugin/notes.js", "slides/vendor/katex/fonts/KaTeX_Main-Regular.woff2",
+                 "slides/vendor/katex/LICENSE"):        # `cs451 slides build` from an installed kit
+        assert f"cs451/{part}" in names, part
+    assert "cs451_kit/slides/04-radiosity.md" in names
     assert not [n for n in names if n.startswith("cs451/") and "reference" in n.split("/")[:-1]]
     assert not [n for n in names if "__pycache__" in n or n.endswith(".pyc") or ".cs451-cache" in n]
 

@@ -43,6 +43,7 @@ try:  # not on Windows: there the student copy runs without limits (nothing to p
 except ImportError:  # pragma: no cover
     resource = None  # type: ignore[assignment]
 
+from .. import ENGINE_DIR, LECTURER_ONLY
 from ..errors import KitError
 from . import cgroups
 from .staging import StagedUpload, stage_upload
@@ -62,6 +63,14 @@ DESCRIPTIONS = {
     "uid": "a throwaway user per test, with the kit's files checked unreadable first",
     "none": "no isolation (a student copy of the kit: your own code runs as you)",
 }
+
+
+def _sandbox_litter(folder: str, names: list[str]) -> set[str]:
+    """What a sandbox's copy of the engine leaves out: byte code, and the lecturers' folders (no test imports them)."""
+    left = set(shutil.ignore_patterns("*.pyc", "__pycache__")(folder, names))
+    if Path(folder).resolve() == ENGINE_DIR:
+        left |= set(LECTURER_ONLY) & set(names)
+    return left
 
 
 class IsolationError(KitError):
@@ -337,7 +346,7 @@ class Sandbox:
         self.staged = stage_upload(self.upload, self.run_dir / "upload")
         engine = self.run_dir / "engine"
         for source, below in self.engine_sources:
-            shutil.copytree(source, engine / below, ignore=shutil.ignore_patterns("*.pyc", "__pycache__"))
+            shutil.copytree(source, engine / below, ignore=_sandbox_litter)
         self.engine = engine
         (self.run_dir / "jobs").mkdir()
         (self.run_dir / "logs").mkdir(mode=0o700)

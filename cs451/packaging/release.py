@@ -14,7 +14,7 @@ import json
 import shutil
 from pathlib import Path
 
-from .. import ENGINE_DIR, KIT_ROOT, __version__
+from .. import ENGINE_DIR, KIT_ROOT, LECTURER_ONLY, __version__
 from ..copy import MARKER
 from ..errors import KitError
 from ..grading.loader import hidden_summary, load_tests, write_manifest
@@ -27,6 +27,14 @@ from .handout import for_release
 SHIPPED_SPEC_FILES = ("__init__.py", "checks.py")
 #: A folder beside a handout for the kit's copy only (the bench's figures, which its ``<!-- kit -->`` blocks show).
 KIT_FOLDER = "kit"
+
+
+def _engine_litter(folder: str, names: list[str]) -> set[str]:
+    """What ``copy_tree("cs451", …)`` leaves out of a release: the usual litter, and the lecturers' folders."""
+    left = set(LITTER(folder, names))
+    if Path(folder).resolve() == ENGINE_DIR:
+        left |= set(LECTURER_ONLY) & set(names)
+    return left
 
 WORKFLOW_HEADER = """# Runs the public tests of stage {stage} on every push (GitHub Classroom autograding).
 # Built by `cs451 release {stage}`; the points per task are the public tests' points.
@@ -171,7 +179,8 @@ def build_release(stage: str, output: str | Path, include_reference: tuple[str, 
     if not starter.is_dir():
         raise KitError(f"starter/{stage}: missing; run `cs451 starter` first")
     out.mkdir(parents=True, exist_ok=True)
-    for rel in ("cs451", "pyproject.toml", "autograder/__init__.py"):
+    copy_tree("cs451", out, ignore=_engine_litter)
+    for rel in ("pyproject.toml", "autograder/__init__.py"):
         copy_tree(rel, out)
     handout = out / "assignments" / st.handout / "README.md"
     handout.parent.mkdir(parents=True)
