@@ -3,7 +3,6 @@ sum the caption gives, the colours the stage's ramp gives it), item buffers that
 clicks and keys that pick patches and settings, and the window under Xvfb showing what the headless frame shows."""
 from __future__ import annotations
 
-import json
 import os
 import shutil
 import subprocess
@@ -23,9 +22,9 @@ from cs451.scene import load_scene
 from cs451.stages import hemicube as H
 from cs451.stages._hemicube_demo import HemicubeDemo
 
+from demo_windows import XVFB, live_window_result, needs_xvfb
+
 REF = load_impl(KIT_ROOT / "reference" / "hemicube", "hemicube")
-XVFB = ["xvfb-run", "-a", "-s", "-screen 0 1280x1024x24"]
-needs_xvfb = pytest.mark.skipif(shutil.which("xvfb-run") is None, reason="needs Xvfb (xvfb-run) for a window")
 QUADS = scene_polygons(load_scene("cornell-box"))[0]
 
 
@@ -185,12 +184,6 @@ LIVE = textwrap.dedent("""
 
 @needs_xvfb
 def test07_a_live_window_answers_keys_and_clicks_and_escape_quits(tmp_path):
-    script = tmp_path / "live.py"
-    script.write_text(LIVE)
-    done = subprocess.run([*XVFB, sys.executable, str(script), str(KIT_ROOT / "reference" / "hemicube")],
-                          capture_output=True, text=True, timeout=300, cwd=tmp_path)
-    lines = [line for line in done.stdout.splitlines() if line.startswith("RESULT ")]
-    assert done.returncode == 0 and lines, done.stdout[-2000:] + done.stderr[-2000:]
-    seen = json.loads(lines[-1].removeprefix("RESULT "))
+    seen = live_window_result(LIVE, KIT_ROOT / "reference" / "hemicube", tmp_path)
     assert seen["patches"] == [0, 1, 2], "patch 0, then → to 1, then a click on the back wall (2)"
     assert seen["frames"] < 100 and "← → patch" in seen["title"] and "p proximity fix (H6)" in seen["title"]

@@ -3,7 +3,6 @@ what the submission's W11 casts (its own counters say so), a pixel's ray tree th
 under Xvfb showing what the headless frame shows."""
 from __future__ import annotations
 
-import json
 import os
 import shutil
 import subprocess
@@ -20,11 +19,11 @@ from cs451.impl import load_impl
 from cs451.imageio import load_png
 from cs451.stages._whitted_demo import WhittedDemo, progressive_order
 
+from demo_windows import XVFB, live_window_result, needs_xvfb
+
 REF = load_impl(KIT_ROOT / "reference" / "whitted", "whitted")
 SIZE = "80x60"
 W, H = 80, 60
-XVFB = ["xvfb-run", "-a", "-s", "-screen 0 1280x1024x24"]
-needs_xvfb = pytest.mark.skipif(shutil.which("xvfb-run") is None, reason="needs Xvfb (xvfb-run) for a window")
 
 
 def cs451(*args: str, display: bool = False, timeout: int = 300) -> subprocess.CompletedProcess:
@@ -168,13 +167,7 @@ LIVE = textwrap.dedent("""
 
 @needs_xvfb
 def test05_a_live_window_answers_keys_and_clicks_and_q_quits(tmp_path):
-    script = tmp_path / "live.py"
-    script.write_text(LIVE)
-    done = subprocess.run([*XVFB, sys.executable, str(script), str(KIT_ROOT / "reference" / "whitted")],
-                          capture_output=True, text=True, timeout=300, cwd=tmp_path)
-    lines = [line for line in done.stdout.splitlines() if line.startswith("RESULT ")]
-    assert done.returncode == 0 and lines, done.stdout[-2000:] + done.stderr[-2000:]
-    seen = json.loads(lines[-1].removeprefix("RESULT "))
+    seen = live_window_result(LIVE, KIT_ROOT / "reference" / "whitted", tmp_path)
     assert seen["shadows"] is False, "s switched the shadows off"
     assert seen["pixel"] == seen["want"], "the click drew that pixel's tree"
     assert seen["frames"] < 100, "q closed the window"
