@@ -15,7 +15,8 @@ The hierarchy: the reference's binned-SAH build and four-wide layout (warm, with
 Embree's scene build, and what the cache hands back for the same boxes.
 
 Part 3 (``whitted_frames``): whole frames at 320×240 against the kernels their rays go through and
-against Mitsuba 3's frame of the same scene. A summary table prints every ratio measured in this run.
+against Mitsuba 3's frame of the same scene. Part 4 (``whitted_demo``): how long the demo takes to refine
+the same frames. A summary table prints every ratio measured in this run.
 """
 from __future__ import annotations
 
@@ -34,6 +35,7 @@ from cs451.raytrace import BVH_KEYS
 from cs451.scene import load_scene, parse_scene
 from cs451.stages import whitted as stage
 
+from .whitted_demo import demo_speed, print_demo_speed
 from .whitted_frames import frames, print_frames
 from .whitted_kernels import best_of, closest_queries, reference_parts
 from .whitted_kernels import threads as threads_of
@@ -243,7 +245,7 @@ def _plot(rows: list[dict], speed: dict, path: Path) -> None:
     plt.close(fig)
 
 
-def summary(speed: dict, frame_rows: list[dict]) -> list[str]:
+def summary(speed: dict, frame_rows: list[dict], demo_rows: list[dict]) -> list[str]:
     """The issue's table: each ratio measured side by side in this run (Markdown)."""
     lines = ["| measure | kit | peer, same run | ratio |", "|---|---|---|---|"]
     kinds, build = speed["kinds"], speed["build"]
@@ -275,6 +277,12 @@ def summary(speed: dict, frame_rows: list[dict]) -> list[str]:
             lines.append(f"| the same frames beside Mitsuba 3 direct lighting, {on} (s) | {each(f'frame_{t}t_s', '.3f')} "
                          f"| Mitsuba {each(f'mitsuba_{t}t_s', '.3f')} | kit/Mitsuba time "
                          f"{each(f'frame_over_mitsuba_time_{t}t')} |")
+    names = " · ".join(r["scene"] for r in demo_rows)
+    lines.append(f"| `cs451 demo whitted` 320×240, fresh demo to finished picture: {names}; s (frames shown, fps), "
+                 f"against one render of the same frame | "
+                 + " · ".join(f"{r['refine_s']:.2f} ({r['frames']}, {r['fps']:.0f} fps)" for r in demo_rows)
+                 + " | render " + " · ".join(f"{r['frame_s']:.3f} s" for r in demo_rows)
+                 + " | " + " · ".join(f"{r['refine_over_frame']:.1f}×" for r in demo_rows) + " |")
     return lines
 
 
@@ -282,6 +290,7 @@ def main(output: Path, quick: bool = False) -> dict:
     impl = load_impl(resolve_impl("reference", "whitted"), "whitted")
     speed = rays_per_second(impl, quick)
     frame_rows = frames(impl, quick)
+    demo_rows = demo_speed(impl, quick)
     rows = time_against_error(impl, quick)
     print("stage 2 whitted: time against error (RMS, linear, clipped to [0, 1]) against a converged render "
           f"(spp {CONVERGED['spp']}, cut-off {CONVERGED['min_weight']:g}, depth {CONVERGED['max_depth']}, "
@@ -303,10 +312,12 @@ def main(output: Path, quick: bool = False) -> dict:
     for kind, r in speed["kinds"].items():
         print(f"{kind:<8} {r['rays']:>8} " + " ".join(f"{r[c]:>14.3f}" if c in r else f"{'-':>14}" for c in cols))
     print_frames(frame_rows)
-    table = summary(speed, frame_rows)
+    print_demo_speed(demo_rows)
+    table = summary(speed, frame_rows, demo_rows)
     print("\nsummary (each ratio measured side by side in this run)\n" + "\n".join(table))
     output.mkdir(parents=True, exist_ok=True)
-    result = {"time_against_error": rows, "closest_hit": speed, "frames": frame_rows, "converged": CONVERGED,
+    result = {"time_against_error": rows, "closest_hit": speed, "frames": frame_rows, "demo": demo_rows,
+              "converged": CONVERGED,
               "summary": table}
     (output / "whitted.json").write_text(json.dumps(result, indent=2))
     _plot(rows, speed, output / "whitted.png")

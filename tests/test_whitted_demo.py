@@ -17,7 +17,7 @@ from cs451 import KIT_ROOT
 from cs451.compare import compare_images
 from cs451.impl import load_impl
 from cs451.imageio import load_png
-from cs451.stages._whitted_demo import WhittedDemo, progressive_order
+from cs451.stages._whitted_demo import WhittedDemo, next_piece, progressive_order
 
 from demo_windows import XVFB, live_window_result, needs_xvfb
 
@@ -194,8 +194,8 @@ def test07_the_starter_stops_at_its_first_unwritten_task_in_one_line(tmp_path):
 
 @pytest.mark.slow
 def test08_full_size_demo_ends_on_cs451_render(tmp_path):
-    """At the scene's own size `cs451 render` takes the reference's compiled path (one large batch), the demo its
-    numpy path (small pieces): the last frame still matches within the stage's image tolerance."""
+    """At the scene's own size `cs451 render` traces one large batch, the demo pieces sized by time (both through the
+    reference's compiled frame once the camera rays have thrown its switch): the last frame matches the render."""
     assert cs451("demo", "whitted", "-o", str(tmp_path / "frames"), timeout=900).returncode == 0
     assert cs451("render", "whitted", "-o", str(tmp_path / "render.png"), timeout=900).returncode == 0
     last = load_png(sorted((tmp_path / "frames").glob("whitted-*.png"))[-1])
@@ -203,3 +203,33 @@ def test08_full_size_demo_ends_on_cs451_render(tmp_path):
     zoom = last.shape[1] // target.shape[1]
     verdict = compare_images(target, last[:target.shape[0] * zoom:zoom, :target.shape[1] * zoom:zoom])
     assert verdict.passed, verdict.message
+
+
+def test09_pieces_grow_past_a_fixed_overhead_and_fit_a_proportional_cost():
+    assert next_piece((100, 0.030), None, 0.02, 10**6) == 66, "one piece, no fit yet: the proportional guess"
+    assert next_piece((200, 0.031), (100, 0.030), 0.02, 10**6) == 400, "the overhead alone is over the target: double"
+    assert abs(next_piece((1000, 0.010), (500, 0.005), 0.02, 10**6) - 2000) <= 1, "proportional: the target's worth"
+    assert next_piece((1000, 0.010), (500, 0.005), 0.02, 1500) == 1500 and next_piece((50, 1.0), None, 0.02, 99) == 16
+
+
+def test10_a_compiled_size_refines_through_the_compiled_frame_and_the_switches_still_reach_w7(monkeypatch):
+    """At 160 × 120 the camera rays are a large batch, so the reference's W11 runs its compiled frame (which calls
+    neither W5 nor W7) on every piece; while the shadow switch or the ray tree replaces W7 or W5 it must call them."""
+    import importlib
+    frame = importlib.import_module(REF.__name__ + ".frame")
+    whole, used = frame.trace_frame, []
+    monkeypatch.setattr(frame, "trace_frame", lambda *a, **k: used.append(len(a[1])) or whole(*a, **k))
+    demo = WhittedDemo(REF, "whitted", (160, 120))
+    while demo.busy():
+        demo.step(0.05)
+    lit = demo.image().copy()
+    assert sum(used) == 160 * 120 and demo.render.scene.counters["shadow"] > 0, "every pixel through the compiled frame"
+    x, y = demo.default_pixel()
+    demo.handle(("click", x * demo.zoom + 1, y * demo.zoom + 1))
+    assert demo.tree.count("refraction") >= 2 and demo.tree.shadows, "the tree is recorded from W5 and W7's calls"
+    used.clear()
+    demo.handle(("key", "s"))
+    while demo.busy():
+        demo.step(0.05)
+    assert used == [] and demo.render.scene.counters["shadow"] == 0 and demo.image().mean() > lit.mean()
+    assert demo.tree.shadows == []

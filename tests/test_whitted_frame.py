@@ -238,3 +238,12 @@ def test11_mitsuba_is_handed_the_same_camera_and_geometry(ref, tmp_path):
         lit = image[..., :3].max(axis=2) > 0
         assert image.shape[:2] == (36, 48) and lit.mean() > 0.2
         assert not (lit & ~near).any(), f"{name}: Mitsuba lights pixels where the kit sees background"
+
+
+def test12_the_bench_times_the_demo_to_a_finished_picture(ref):
+    from cs451.stages._whitted_demo import WhittedDemo, progressive_order
+    demo = WhittedDemo(ref, "whitted", (40, 30))
+    seconds, shown = bench_module("whitted_demo")._refine(demo)
+    assert not demo.busy() and seconds > 0
+    assert shown >= len(progressive_order(40, 30)[1]), "each pass ends a step, and a frame is drawn after each"
+    assert demo.render.scene.counters["camera"] == 40 * 30

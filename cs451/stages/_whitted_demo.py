@@ -12,9 +12,10 @@ and its recursion (W11). The switches change what W11 is handed, never its code:
 - the cut-off off: β = 0, so every ray goes on to the depth limit; ``+`` and ``-`` move that limit.
 
 The picture refines coarse to fine: one pixel in every 16 × 16 block first (painted over its
-block), then every 8th, 4th, 2nd pixel and the rest, each pixel traced once, in pieces of at
-most :data:`PIECE_RAYS` rays between frames. A finished picture is kept per setting, so
-switching back is instant.
+block), then every 8th, 4th, 2nd pixel and the rest, each pixel traced once, in pieces sized by
+the time the last piece took (half a step's work, at most :data:`PIECE_RAYS` rays): a slow
+numpy submission keeps the window answering, a fast one traces a whole pass between two frames.
+A finished picture is kept per setting, so switching back is instant.
 
 A pixel's ray tree is what the submission's own W11 asks its W5 (closest hits) and W7 (shadow
 rays) while it traces that pixel's camera ray, recorded as it goes: the kit draws the tree, it
@@ -23,10 +24,9 @@ secondary ray's parent is the hit its origin leaves from; it is a reflection whe
 on the side the parent ray came from, a refraction otherwise. The tree is drawn through a
 pinhole fitted to the submission's own camera rays (the kit writes no look-at of its own).
 
-Two imports of the submission: one answers W1 once for the whole image; the other traces, in
-small pieces only, so every piece takes the submission's path for small batches, where its
-W11 calls its W5 and W7. (The reference hands any batch to compiled kernels, which call
-neither, once it has seen a large one, and a whole image's camera rays are one.)
+The reference traces large images in one compiled kernel that calls neither W5 nor W7; while
+either is replaced (the shadow switch, the ray-tree recording) its W11 takes the per-bounce path
+that calls them, so the switches and the tree see what any W11 does.
 """
 from __future__ import annotations
 
@@ -50,9 +50,9 @@ from ..scene import Sphere, load_scene
 from . import whitted as W
 from .base import functions_replaced
 
-#: The most rays one piece hands to W11: a frame's worth of work on a slow submission, and a "small batch"
-#: to any submission (the reference's compiled path starts at 10,000).
-PIECE_RAYS = 4096
+#: The most rays one piece hands to W11 (its memory); below that, a piece is what the last one says fits in
+#: half a step.
+PIECE_RAYS = 1 << 18
 #: Frames are at least this wide: a small image is shown with each pixel as a square of pixels.
 MIN_FRAME_WIDTH = 640
 #: Block size of the first, coarsest pass (one pixel traced per block).
@@ -199,6 +199,26 @@ def progressive_order(width: int, height: int) -> tuple[np.ndarray, list[int], l
     return np.concatenate(order), ends, blocks
 
 
+def next_piece(this: tuple[int, float], last: tuple[int, float] | None, target: float, most: int) -> int:
+    """How many pixels the next piece traces to take about ``target`` seconds, from the last two (pixels, seconds).
+
+    The two fit a line, seconds = overhead + cost · pixels: a W11 whose per-bounce numpy work costs the same
+    for 100 rays as for 1,000 gets larger pieces (doubling while the overhead alone exceeds the target), not
+    smaller ones, as a proportional rule would make them.
+    """
+    n, took = this
+    cost, overhead = took / max(n, 1), 0.0
+    if last is not None and last[0] != n:
+        slope = (took - last[1]) / (n - last[0])
+        if slope > 0:
+            cost, overhead = slope, took - slope * n
+    if overhead >= target or cost <= 0:
+        want = 2 * n
+    else:
+        want = (target - overhead) / cost
+    return int(np.clip(want, 16, most))
+
+
 def _all_light(scene: Any, origins: np.ndarray, targets: np.ndarray) -> np.ndarray:
     """W7's answer with shadows off: every light sample reaches every point, and no shadow ray is cast."""
     return np.ones((len(np.asarray(origins)), 3))
@@ -236,7 +256,7 @@ class WhittedDemo:
         self.origins, self.directions = W.STAGE.call(module, "W1", self.scene.camera, self.width * self.k,
                                                      self.height * self.k)
         self.camera = Pinhole(self.origins, self.directions, self.width, self.height, self.k)
-        self.tracer = load_impl(Path(module.__file__).parent, "whitted", copy="pieces")
+        self.tracer = module
         self.base = W.prepare(self.scene, self.tracer)
         self.order, self.ends, self.blocks = progressive_order(self.width, self.height)
         wk = self.width * self.k
@@ -244,6 +264,7 @@ class WhittedDemo:
         self.sub_rays = (np.arange(self.k)[:, None] * wk + np.arange(self.k)[None, :]).ravel()
         self.reach = float(np.linalg.norm(np.subtract(self.scene.camera.center, self.scene.camera.eye))) + 1.0
         self.piece = max(1, 256 // self.k ** 2)
+        self._last_piece: tuple[int, float] | None = None
         self.settings = Settings(depth=self.opts.max_depth)
         self.renders: dict[Settings, _Render] = {}
         self.tree: RayTree | None = None
@@ -286,7 +307,8 @@ class WhittedDemo:
             started = time.perf_counter()
             self._trace(r, self.order[r.pos:r.pos + n], self.first_ray[r.pos:r.pos + n], self.blocks[r.level])
             took = time.perf_counter() - started
-            self.piece = int(np.clip(n * 0.5 * seconds / max(took, 1e-4), 16, PIECE_RAYS // self.k ** 2))
+            self.piece = next_piece((n, took), self._last_piece, 0.5 * seconds, PIECE_RAYS // self.k ** 2)
+            self._last_piece = (n, took)
             r.pos += n
             self._frame = None
             if r.pos == end:

@@ -1,0 +1,69 @@
+"""How fast `cs451 demo whitted` refines, against the frame it ends on.
+
+For each bundled Whitted scene at 320×240 on the reference, headless, as the player drives it (``step`` for
+``STEP_SECONDS``, then a frame drawn): the time from a fresh demo to the finished picture, the frames shown
+on the way (frames per second), and the same after the shadow switch (which replaces W7, so the reference
+traces bounce by bounce instead of in its compiled frame). Beside each, one ``render_traced`` of the same
+scene and size in the same run: the ratio says what the refinement costs over the frame itself.
+"""
+from __future__ import annotations
+
+import math
+import time
+from types import ModuleType
+
+from cs451.demos.player import STEP_SECONDS
+from cs451.progress import Progress
+from cs451.scene import load_scene
+from cs451.stages import whitted as stage
+from cs451.stages._whitted_demo import WhittedDemo
+
+from .whitted_kernels import best_of
+
+SIZE = (320, 240)
+SCENES = ("whitted", "cornell-spheres", "rippled-torus")
+
+
+def _refine(demo: WhittedDemo) -> tuple[float, int]:
+    """Seconds and frames from now until the demo's picture is finished, as the player runs it."""
+    start, shown = time.perf_counter(), 0
+    while demo.busy():
+        demo.step(STEP_SECONDS)
+        demo.frame()
+        shown += 1
+    return time.perf_counter() - start, shown
+
+
+def demo_speed(impl: ModuleType, quick: bool) -> list[dict]:
+    rows = []
+    bar = Progress("demo refinement", len(SCENES))
+    for name in SCENES:
+        scene = load_scene(name)
+        WhittedDemo(impl, name, (32, 24))            # warm up: compile or load the kernels
+        stage.render_traced(scene, impl, SIZE)
+        frame_s = best_of(lambda: stage.render_traced(scene, impl, SIZE), 2 if quick else 5)
+        best = {"refine_s": math.inf, "switched_s": math.inf}
+        for _ in range(1 if quick else 3):
+            demo = WhittedDemo(impl, name, SIZE)
+            seconds, shown = _refine(demo)
+            if seconds < best["refine_s"]:
+                best.update(refine_s=seconds, frames=shown)
+            demo.handle(("key", "s"))
+            seconds, shown = _refine(demo)
+            if seconds < best["switched_s"]:
+                best.update(switched_s=seconds, switched_frames=shown)
+        rows.append({"scene": name, "frame_s": frame_s, **best, "fps": best["frames"] / best["refine_s"],
+                     "refine_over_frame": best["refine_s"] / frame_s})
+        bar.advance(note=name)
+    bar.close()
+    return rows
+
+
+def print_demo_speed(rows: list[dict]) -> None:
+    print(f"\ncs451 demo whitted at {SIZE[0]}×{SIZE[1]}, reference, headless: from a fresh demo to the finished picture "
+          f"(steps of {STEP_SECONDS * 1e3:.0f} ms, a frame drawn after each), beside one render_traced of the same scene")
+    print(f"{'scene':<16} {'render s':>8} {'refine s':>8} {'frames':>6} {'fps':>5} {'refine/render':>13} "
+          f"{'shadows off s':>13} {'frames':>6}")
+    for r in rows:
+        print(f"{r['scene']:<16} {r['frame_s']:>8.3f} {r['refine_s']:>8.2f} {r['frames']:>6} {r['fps']:>5.1f} "
+              f"{r['refine_over_frame']:>13.1f} {r['switched_s']:>13.2f} {r['switched_frames']:>6}")
