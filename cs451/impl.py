@@ -49,14 +49,10 @@ def earlier_stage_impl(stage: str) -> Path:
                    f"for a release built with --include-reference {stage})")
 
 
-def load_impl(folder: Path, stage: str, copy: str = "") -> ModuleType:
-    """Import a stage package from a folder under a private name, so two implementations never clash.
-
-    ``copy``: a second, independent import of the same folder under its own name (its module state, such as
-    a switch the package throws after a large batch, is its own); "" for the usual one.
-    """
+def load_impl(folder: Path, stage: str) -> ModuleType:
+    """Import a stage package from a folder under a private name, so two implementations never clash."""
     digest = hashlib.sha1(str(folder).encode()).hexdigest()[:10]
-    name = f"_cs451_impl_{stage}_{digest}" + (f"_{copy}" if copy else "")
+    name = f"_cs451_impl_{stage}_{digest}"
     if name in sys.modules:
         return sys.modules[name]
     spec = importlib.util.spec_from_file_location(name, folder / "__init__.py",

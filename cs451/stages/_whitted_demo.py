@@ -45,7 +45,6 @@ from .. import raytrace
 from ..demos.frames import captioned
 from ..demos.player import Event, play
 from ..imageio import to_uint8
-from ..impl import load_impl
 from ..scene import Sphere, load_scene
 from . import whitted as W
 from .base import functions_replaced
