@@ -290,7 +290,7 @@ def main(output: Path, quick: bool = False) -> dict:
     impl = load_impl(resolve_impl("reference", "whitted"), "whitted")
     speed = rays_per_second(impl, quick)
     frame_rows = frames(impl, quick)
-    demo_rows = demo_speed(impl, quick)
+    demo_rows = demo_speed(impl, quick, {r["scene"]: r["render_2t_s"] for r in frame_rows})
     rows = time_against_error(impl, quick)
     print("stage 2 whitted: time against error (RMS, linear, clipped to [0, 1]) against a converged render "
           f"(spp {CONVERGED['spp']}, cut-off {CONVERGED['min_weight']:g}, depth {CONVERGED['max_depth']}, "

@@ -3,8 +3,9 @@
 For each bundled Whitted scene at 320×240 on the reference, headless, as the player drives it (``step`` for
 ``STEP_SECONDS``, then a frame drawn): the time from a fresh demo to the finished picture, the frames shown
 on the way (frames per second), and the same after the shadow switch (which replaces W7, so the reference
-traces bounce by bounce instead of in its compiled frame). Beside each, one ``render_traced`` of the same
-scene and size in the same run: the ratio says what the refinement costs over the frame itself.
+traces bounce by bounce instead of in its compiled frame). Beside each, the same run's time of one
+``render_traced`` of that scene and size (``whitted_frames``, two threads, as the demo runs): the ratio says
+what the refinement costs over the frame itself.
 """
 from __future__ import annotations
 
@@ -14,14 +15,9 @@ from types import ModuleType
 
 from cs451.demos.player import STEP_SECONDS
 from cs451.progress import Progress
-from cs451.scene import load_scene
-from cs451.stages import whitted as stage
 from cs451.stages._whitted_demo import WhittedDemo
 
-from .whitted_kernels import best_of
-
-SIZE = (320, 240)
-SCENES = ("whitted", "cornell-spheres", "rippled-torus")
+from .whitted_frames import SIZE
 
 
 def _refine(demo: WhittedDemo) -> tuple[float, int]:
@@ -34,14 +30,13 @@ def _refine(demo: WhittedDemo) -> tuple[float, int]:
     return time.perf_counter() - start, shown
 
 
-def demo_speed(impl: ModuleType, quick: bool) -> list[dict]:
+def demo_speed(impl: ModuleType, quick: bool, render_s: dict[str, float]) -> list[dict]:
+    """One row per scene; ``render_s``: each scene's render time at ``SIZE``, measured by ``whitted_frames``."""
     rows = []
-    bar = Progress("demo refinement", len(SCENES))
-    for name in SCENES:
-        scene = load_scene(name)
+    bar = Progress("demo refinement", len(render_s))
+    for name in render_s:
         WhittedDemo(impl, name, (32, 24))            # warm up: compile or load the kernels
-        stage.render_traced(scene, impl, SIZE)
-        frame_s = best_of(lambda: stage.render_traced(scene, impl, SIZE), 2 if quick else 5)
+        frame_s = render_s[name]
         best = {"refine_s": math.inf, "switched_s": math.inf}
         for _ in range(1 if quick else 3):
             demo = WhittedDemo(impl, name, SIZE)
