@@ -13,7 +13,7 @@ rays (primary rays and random rays from inside the torus's bounding box). Embree
 is one thread; two threads each take half the rays. Skipped with a note when embreex is absent.
 Each kind is timed again on only the rays that hit a triangle: a ray that misses the torus's box costs the
 kit a few nanoseconds and Embree's Python wrapper more, so the mix of the two moves the whole-batch ratio.
-The hierarchy: the reference's binned-SAH build and four-wide layout (warm, without the cache) against
+The hierarchy: the reference's binned-SAH build and eight-wide layout (warm, without the cache) against
 Embree's scene build, and what the cache hands back for the same boxes.
 
 Part 3 (``whitted_frames``): whole frames at 320×240 against the kernels their rays go through and
@@ -129,7 +129,7 @@ def _embree(ts):
 
 
 def hierarchy_build(impl, ts, escene_build_s: float | None, quick: bool) -> dict:
-    """The reference's build (binned SAH, numba) and four-wide layout, warm and uncached, beside Embree's."""
+    """The reference's build (binned SAH, numba) and eight-wide layout, warm and uncached, beside Embree's."""
     ref = reference_parts(impl)
     lo, hi = ts.bounds()
     leaf = ref.bvh.LEAF_SIZE
@@ -137,10 +137,10 @@ def hierarchy_build(impl, ts, escene_build_s: float | None, quick: bool) -> dict
     start = time.perf_counter()
     bvh = dict(zip(BVH_KEYS, ref.hierarchy.build(lo, hi, leaf)))
     first = time.perf_counter() - start                    # includes loading (or compiling) the kernel
-    ref.hierarchy.four_wide(bvh, ts.n_spheres, tri)
+    ref.hierarchy.eight_wide(bvh, ts.n_spheres, tri)
     repeats = 2 if quick else 5
     build_s = best_of(lambda: ref.hierarchy.build(lo, hi, leaf), repeats)
-    layout_s = best_of(lambda: ref.hierarchy.four_wide(bvh, ts.n_spheres, tri), repeats)
+    layout_s = best_of(lambda: ref.hierarchy.eight_wide(bvh, ts.n_spheres, tri), repeats)
     ref.bvh.build_bvh(lo, hi)
     cached_s = best_of(lambda: ref.bvh.build_bvh(lo, hi), repeats)
     out = {"build_s": build_s, "layout_s": layout_s, "first_build_s": first, "cached_s": cached_s,
@@ -277,7 +277,7 @@ def summary(speed: dict, frame_rows: list[dict], demo_rows: list[dict]) -> list[
                          f"{r['reference_1t_hit_Mrays']:.2f} | {peer} | {ratio} |")
     peer = f"Embree {build['embree_build_s']:.3f} s" if "embree_build_s" in build else "-"
     ratio = f"{build['ratio']:.2f}×" if "ratio" in build else "-"
-    lines.append(f"| hierarchy build + four-wide layout, {speed['triangles']:,} triangles (again from the cache: "
+    lines.append(f"| hierarchy build + eight-wide layout, {speed['triangles']:,} triangles (again from the cache: "
                  f"{build['cached_s'] * 1e3:.1f} ms) | {build['build_s'] + build['layout_s']:.3f} s | {peer} | {ratio} |")
     names = " · ".join(r["scene"] for r in frame_rows)
 
@@ -321,7 +321,7 @@ def main(output: Path, quick: bool = False) -> dict:
               f"{r['rays']:>9} {r['rays'] / r['seconds'] / 1e6:>8.2f} {r['rms_error']:>10.5f}")
     b = speed["build"]
     print(f"\nclosest-hit queries, {speed['triangles']:,} triangles (rippled torus alone), {speed['cpus']} CPUs; "
-          f"hierarchy: build {b['build_s']:.3f} s + four-wide layout {b['layout_s']:.3f} s ({b['nodes']} nodes; "
+          f"hierarchy: build {b['build_s']:.3f} s + eight-wide layout {b['layout_s']:.3f} s ({b['nodes']} nodes; "
           f"first build in this process {b['first_build_s']:.2f} s, from the cache {b['cached_s'] * 1e3:.1f} ms)"
           + (f", Embree {b['embree_build_s']:.3f} s" if "embree_build_s" in b else ""))
     if "embree" in speed:

@@ -1,5 +1,5 @@
 """Stage 2's fast paths: the compiled whole-frame kernel against the numpy wavefront (what the grader runs)
-and against the per-bounce compiled path, the hierarchy and layout caches, the four-wide layout, the
+and against the per-bounce compiled path, the hierarchy and layout caches, the eight-wide layout, the
 compile message, and the scaffolding's caches (meshes read once, hierarchies checked once)."""
 from __future__ import annotations
 
@@ -121,14 +121,15 @@ def test04_a_cached_hierarchy_is_what_a_fresh_build_gives_and_cannot_be_spoilt(r
     assert np.array_equal(again["order"], fresh["order"])
 
 
-def test05_four_wide_layout_holds_every_node_once_in_boxes_that_contain_it(ref):
+def test05_eight_wide_layout_holds_every_node_once_in_boxes_that_contain_it(ref):
     hierarchy = part(ref, "hierarchy")
     ts = whitted.prepare(load_scene("rippled-torus"), ref)
     bvh = ts.bvh
     tri = np.concatenate([ts.tri_v0, ts.tri_v1, ts.tri_v2], axis=1)
-    nf, ni, order, ltri, use = hierarchy.four_wide(bvh, ts.n_spheres, tri)
-    assert use and nf.ctypes.data % 64 == 0 and ni.shape[1] == 32
-    kind, ref_ = ni[:, 28:32], ni[:, 24:28]
+    nf, ni, order, ltri, use = hierarchy.eight_wide(bvh, ts.n_spheres, tri)
+    w = hierarchy.WIDTH
+    assert use and nf.ctypes.data % 64 == 0 and ni.shape[1] == 8 * w == 64
+    kind, ref_ = ni[:, 7 * w:], ni[:, 6 * w:7 * w]
     # every leaf of the binary tree is one slot (its start and count kept), inner slots point at rows
     leaves = np.nonzero(bvh["child"] < 0)[0]
     slots = kind >= 0
@@ -140,8 +141,8 @@ def test05_four_wide_layout_holds_every_node_once_in_boxes_that_contain_it(ref):
     # float32 boxes hold what they stand for: each leaf slot's box contains its triangles' corners
     is_tri = order >= ts.n_spheres
     for q, c in zip(*np.nonzero(slots)):
-        box_lo, box_hi = nf[q, [c, 4 + c, 8 + c]], nf[q, [12 + c, 16 + c, 20 + c]]
-        first, last = ni[q, 24 + c], ni[q, 24 + c] + ni[q, 28 + c]
+        box_lo, box_hi = nf[q, [c, w + c, 2 * w + c]], nf[q, [3 * w + c, 4 * w + c, 5 * w + c]]
+        first, last = ni[q, 6 * w + c], ni[q, 6 * w + c] + ni[q, 7 * w + c]
         t = ltri[first:last][is_tri[first:last]].reshape(-1, 3)
         assert np.all(t >= box_lo) and np.all(t <= box_hi)
     assert np.array_equal(ltri[is_tri], tri[order[is_tri] - ts.n_spheres]) and not ltri[~is_tri].any()

@@ -262,3 +262,55 @@ def test10_area_light_matches_mitsuba_direct_lighting(ref, tmp_path):
     full = keep.reshape(8, 4, 8, 4).all(axis=(1, 3))
     rel = np.abs(blocks(theirs) - blocks(ours)) / np.maximum(blocks(ours), 0.16)
     assert np.median(rel[full]) < 0.02 and np.percentile(rel[full], 90) < 0.08
+
+
+def translated(data: dict, offset: float) -> dict:
+    """The scene moved by (offset, offset, offset): camera, light, plane, sphere and mesh alike."""
+    d = copy.deepcopy(data)
+    move = lambda p: [v + offset for v in p]   # noqa: E731
+    d["camera"]["eye"], d["camera"]["center"] = move(d["camera"]["eye"]), move(d["camera"]["center"])
+    for light in d["lights"]:
+        light["position"] = move(light["position"])
+    for obj in d["objects"]:
+        key = {"plane": "point", "sphere": "center", "mesh": "translate"}[obj["type"]]
+        obj[key] = move(obj.get(key, [0, 0, 0]))
+    return d
+
+
+@pytest.mark.parametrize("offset", [0.0, 1e6])
+def test11_the_float32_box_test_loses_no_hit(ref, offset):
+    """The compiled traversal tests its boxes in float32, widened by the test's error bound. Far from the origin a
+    float32 step (0.06 at 1e6) is wider than the torus's triangles, and axis-parallel rays aimed at the mesh's
+    vertices run along box faces with exact zeros in their directions: every hit must still be the float64
+    numpy path's, and every shadow ray's transmittance too."""
+    wave = importlib.import_module(ref.__name__ + ".wavefront")
+    bvh = importlib.import_module(ref.__name__ + ".bvh")
+    sc = parse_scene(translated(bundled("rippled-torus"), offset), "rippled-torus moved")
+    ts = whitted.prepare(sc, ref)
+    assert ts.bvh is not None
+    o, d = ref.camera_rays(sc.camera, 160, 120)
+    rng = np.random.default_rng(RNG_SEED)
+    vertex = ts.tri_v1[rng.choice(ts.n_triangles, 6000, replace=False)]
+    axis = np.repeat(np.eye(3), 2000, axis=0) * rng.choice([-1.0, 1.0], (6000, 1))
+    o = np.concatenate([o, vertex - 0.5 * axis])       # aimed at a vertex along x, y or z, grazing box faces
+    d = np.concatenate([d, axis])
+    t1, p1, _, _, _ = wave.closest(ts, o, d)
+    saved = bvh.COMPILED_RAYS
+    bvh.COMPILED_RAYS = 0
+    try:
+        t2, p2, _ = ref.closest_hit(ts, o, d)
+        x = o + np.where(np.isfinite(t2), t2 * 0.5, 1.0)[:, None] * d
+        target = np.tile(ts.light_position[0], (len(o), 1))
+        s2 = ref.shadow_transmission(ts, x, target)
+    finally:
+        bvh.COMPILED_RAYS = saved
+    hit1, hit2 = np.isfinite(t1), np.isfinite(t2)
+    assert hit2[-6000:].mean() > 0.75                   # most vertex rays hit (some only graze the surface)
+    assert np.array_equal(hit1, hit2), f"{np.sum(hit1 != hit2)} rays hit in one path and not the other"
+    assert np.allclose(t1[hit1], t2[hit1], rtol=1e-12, atol=0)
+    camera = slice(0, len(o) - 6000)                    # (a vertex is shared: any of its triangles may be named)
+    assert np.mean(p1[camera] == p2[camera]) > 0.999
+    seg = target - x
+    dist = np.linalg.norm(seg, axis=1)
+    s1, _, _ = wave.transmission(ts, x, seg / dist[:, None], dist)
+    assert np.array_equal(s1, s2)

@@ -1,7 +1,8 @@
 """The reference's compiled inner loops (numba): hierarchy traversal, closest hit, shadow rays, and a
 whole Whitted frame (closest hit, shading, shadow rays and the recursion for each camera ray).
 
-Written per ray, in float64, and run on chunks of rays in threads (``nogil``, see ``running.py``).
+Written per ray, in float64 (the hierarchy's boxes aside: tested in float32, widened by the test's error
+bound), and run on chunks of rays in threads (``nogil``, see ``running.py``).
 A clear numpy solution does not need this file: it is how the reference reaches Embree-like speeds
 (see ``bench/whitted.py``). The frame kernel lives here with the traversal it inlines because numba's
 cache checks only the file a kernel is defined in. Students' copies of it are empty.
@@ -18,13 +19,18 @@ from numba import njit
 _JIT = dict(cache=True, nogil=True, error_model="numpy", _nrt=False)
 _INLINE = dict(_JIT, inline="always")  # helpers: inlined in numba's IR, no call
 STACK = 256
-_ROW = np.uint64(32)   # words per row of the four-wide hierarchy (see hierarchy.four_wide)
+_ROW = np.uint64(64)   # words per row of the eight-wide hierarchy (see hierarchy.eight_wide)
+_F0 = np.float32(0.0)
+#: The box test's relative slack in float32, 2^-21 (8 ulps): it covers the three roundings of (b - o)·inv
+#: and the widening's own two (``_widen``), so no box a ray enters in exact arithmetic is missed.
+_SLACK32 = np.float32(2.0 ** -21)
 
 
 def scratch(max_depth: int = 0) -> tuple[np.ndarray, ...]:
     """One thread's working memory for any kernel here: the traversal stack (node, kind, entry distance),
-    four children's distances, and the frame's waiting rays (origin, direction, weight, depth)."""
-    return (np.empty(STACK, np.int64), np.empty(STACK, np.int64), np.empty(STACK), np.empty(4),
+    a row's eight entry distances then the entered ones sorted (distance, slot), and the frame's waiting
+    rays (origin, direction, weight, depth)."""
+    return (np.empty(STACK, np.int64), np.empty(STACK, np.int64), np.empty(STACK), np.empty(24),
             np.empty((2 * max_depth + 2, 10)))
 
 
@@ -108,10 +114,17 @@ def _shear(ox, oy, oz, dx, dy, dz):
 @njit(**_INLINE)
 def _setup(ox, oy, oz, dx, dy, dz, boxes, triangles):
     """What traversal needs of a ray, computed only where it is used: the inverse direction (for boxes) and
-    the watertight test's shear (for triangles)."""
+    the watertight test's shear (for triangles).
+
+    Along an axis the ray is parallel to, the inverse is +inf whatever the zero's sign: then a ray lying in a
+    box's face gets NaN for that face's distance and ±inf for the other, in the order the slab tests pass
+    over (1/-0.0 = -inf would swap them, and such a ray, in the box, was taken to miss it).
+    """
     ix, iy, iz = 0.0, 0.0, 0.0
     if boxes:
-        ix, iy, iz = 1.0 / dx, 1.0 / dy, 1.0 / dz
+        ix = 1.0 / dx if dx != 0.0 else math.inf
+        iy = 1.0 / dy if dy != 0.0 else math.inf
+        iz = 1.0 / dz if dz != 0.0 else math.inf
     if triangles:
         kx, ky, kz, sx, sy, sz, okx, oky, okz = _shear(ox, oy, oz, dx, dy, dz)
     else:
@@ -120,28 +133,28 @@ def _setup(ox, oy, oz, dx, dy, dz, boxes, triangles):
 
 
 @njit(**_INLINE)
-def _slabs(nf, q, c, ox, oy, oz, ix, iy, iz, tmax):
-    """Entry distance into child c's box of row q (float32, rounded outwards), or inf."""
+def _root(nf, ox, oy, oz, ix, iy, iz, tmax):
+    """Entry distance into the root's box (slot 0 of row 0, float32 rounded outwards), or inf; in float64."""
     t0 = 0.0
     t1 = tmax
-    ta = (np.float64(nf[q * _ROW + np.uint64(c)]) - ox) * ix
-    tb = (np.float64(nf[q * _ROW + np.uint64(12 + c)]) - ox) * ix
+    ta = (np.float64(nf[0]) - ox) * ix
+    tb = (np.float64(nf[24]) - ox) * ix
     if ta > tb:
         ta, tb = tb, ta
     if ta > t0:
         t0 = ta
     if tb < t1:
         t1 = tb
-    ta = (np.float64(nf[q * _ROW + np.uint64(4 + c)]) - oy) * iy
-    tb = (np.float64(nf[q * _ROW + np.uint64(16 + c)]) - oy) * iy
+    ta = (np.float64(nf[8]) - oy) * iy
+    tb = (np.float64(nf[32]) - oy) * iy
     if ta > tb:
         ta, tb = tb, ta
     if ta > t0:
         t0 = ta
     if tb < t1:
         t1 = tb
-    ta = (np.float64(nf[q * _ROW + np.uint64(8 + c)]) - oz) * iz
-    tb = (np.float64(nf[q * _ROW + np.uint64(20 + c)]) - oz) * iz
+    ta = (np.float64(nf[16]) - oz) * iz
+    tb = (np.float64(nf[40]) - oz) * iz
     if ta > tb:
         ta, tb = tb, ta
     if ta > t0:
@@ -154,46 +167,116 @@ def _slabs(nf, q, c, ox, oy, oz, ix, iy, iz, tmax):
 
 
 @njit(**_INLINE)
+def _inv32(inv):
+    """An inverse direction component for the float32 test: rounded, inf where the ray is parallel to the
+    axis, and NaN where it is not but float32 cannot hold it (|inv| >= 1e38): NaN slab distances are passed
+    over by ``_axis``, so that axis then lets the ray into every box (more boxes, never fewer)."""
+    if abs(inv) < 1e38 or abs(inv) == math.inf:
+        return np.float32(inv)
+    return np.float32(math.nan)
+
+
+@njit(**_INLINE)
+def _ray32(ox, oy, oz, ix, iy, iz):
+    """The ray as the float32 box tests take it: origin and inverse direction rounded to float32 (``_inv32``),
+    and the slack s (float32, rounded up) by which rounding the origin can move a slab distance: the largest
+    |(o - o32)·inv| over the axes float32 holds the ray's inverse direction on, parallel ones aside (there the
+    test is o inside the slab, and rounding to the nearest float32 keeps a point between two float32 planes
+    between them). An origin beyond float32's range gets NaN everywhere: every box is entered.
+
+    With the widening in ``_widen``, no box is missed that the ray enters, in exact arithmetic, nearer than
+    float32's largest number (3.4e38).
+    """
+    if not (abs(ox) < 1e38 and abs(oy) < 1e38 and abs(oz) < 1e38):
+        nan = np.float32(math.nan)
+        return nan, nan, nan, nan, nan, nan, np.float32(0.0)
+    ox32, oy32, oz32 = np.float32(ox), np.float32(oy), np.float32(oz)
+    s = 0.0
+    if abs(ix) < 1e38:
+        s = max(s, abs((ox - np.float64(ox32)) * ix))
+    if abs(iy) < 1e38:
+        s = max(s, abs((oy - np.float64(oy32)) * iy))
+    if abs(iz) < 1e38:
+        s = max(s, abs((oz - np.float64(oz32)) * iz))
+    return (ox32, oy32, oz32, _inv32(ix), _inv32(iy), _inv32(iz),
+            np.float32(s * (1.0 + 2.0 ** -20) + 1e-43))   # + 1e-43: float32's subnormals round absolutely
+
+
+@njit(**_INLINE)
+def _up32(t):
+    """A float32 at or above t >= 0 (the nearest float32 to t may be below it)."""
+    return np.float32(t * (1.0 + 2.0 ** -22) + 1e-44)
+
+
+@njit(**_INLINE)
 def _axis(nf, q, col, o, inv, t0, t1):
-    """Clip (t0, t1) to one axis's slab of a child's box: near and far planes in words col and col + 12 of row q."""
-    ta = (np.float64(nf[q * _ROW + np.uint64(col)]) - o) * inv
-    tb = (np.float64(nf[q * _ROW + np.uint64(col + 12)]) - o) * inv
+    """Clip (t0, t1) to one axis's slab of a child's box, in float32: near and far planes in words col and
+    col + 24 of row q."""
+    ta = (nf[q * _ROW + np.uint64(col)] - o) * inv
+    tb = (nf[q * _ROW + np.uint64(col + 24)] - o) * inv
     lo = tb if ta > tb else ta
     hi = ta if ta > tb else tb
     return (lo if lo > t0 else t0), (hi if hi < t1 else t1)
 
 
 @njit(**_INLINE)
-def _slabs4(nf, q, ox, oy, oz, ix, iy, iz, tmax, dist):
-    """dist[c] = entry distance into child c's box of row q, or inf: ``_slabs`` for the four children.
-
-    Written out lane by lane (straight-line, the same operations on columns c = 0..3) so that LLVM's
-    SLP vectoriser can test the four boxes at once (see ``running.compiled``).
-    """
-    n0, f0 = _axis(nf, q, 0, ox, ix, 0.0, tmax)
-    n1, f1 = _axis(nf, q, 1, ox, ix, 0.0, tmax)
-    n2, f2 = _axis(nf, q, 2, ox, ix, 0.0, tmax)
-    n3, f3 = _axis(nf, q, 3, ox, ix, 0.0, tmax)
-    n0, f0 = _axis(nf, q, 4, oy, iy, n0, f0)
-    n1, f1 = _axis(nf, q, 5, oy, iy, n1, f1)
-    n2, f2 = _axis(nf, q, 6, oy, iy, n2, f2)
-    n3, f3 = _axis(nf, q, 7, oy, iy, n3, f3)
-    n0, f0 = _axis(nf, q, 8, oz, iz, n0, f0)
-    n1, f1 = _axis(nf, q, 9, oz, iz, n1, f1)
-    n2, f2 = _axis(nf, q, 10, oz, iz, n2, f2)
-    n3, f3 = _axis(nf, q, 11, oz, iz, n3, f3)
-    slack = 1.0000000000000004  # a ray grazing a flat box still enters it
-    dist[0] = n0 if n0 <= f0 * slack else math.inf
-    dist[1] = n1 if n1 <= f1 * slack else math.inf
-    dist[2] = n2 if n2 <= f2 * slack else math.inf
-    dist[3] = n3 if n3 <= f3 * slack else math.inf
+def _widen(n, f, s):
+    """A child's entry distance (float64), or inf: (n, f) widened by the float32 test's error bound first,
+    |t|·2^-21 + s on each side, so that the test can only let in more than exact arithmetic would."""
+    nc = n - (abs(n) * _SLACK32 + s)
+    fc = f + (abs(f) * _SLACK32 + s)
+    return np.float64(nc) if nc <= fc else math.inf
 
 
 @njit(**_INLINE)
-def _order(da, ca, db, cb):
-    """Two (distance, slot) pairs, nearer first (on a tie, the lower slot)."""
-    swap = (db < da) | ((db == da) & (cb < ca))  # bitwise: no branches to mispredict
-    return (db if swap else da), (cb if swap else ca), (da if swap else db), (ca if swap else cb)
+def _slabs8(nf, q, ox, oy, oz, ix, iy, iz, tmax, s, dist):
+    """dist[c] = entry distance into child c's box of row q, or inf, for the eight children, in float32
+    (ray from ``_ray32``, tmax from ``_up32``).
+
+    Written out lane by lane (straight-line, the same operations on columns c = 0..7) so that LLVM's
+    SLP vectoriser can test the eight boxes at once, one AVX register per plane (see ``running.compiled``).
+    """
+    n0, f0 = _axis(nf, q, 0, ox, ix, _F0, tmax)
+    n1, f1 = _axis(nf, q, 1, ox, ix, _F0, tmax)
+    n2, f2 = _axis(nf, q, 2, ox, ix, _F0, tmax)
+    n3, f3 = _axis(nf, q, 3, ox, ix, _F0, tmax)
+    n4, f4 = _axis(nf, q, 4, ox, ix, _F0, tmax)
+    n5, f5 = _axis(nf, q, 5, ox, ix, _F0, tmax)
+    n6, f6 = _axis(nf, q, 6, ox, ix, _F0, tmax)
+    n7, f7 = _axis(nf, q, 7, ox, ix, _F0, tmax)
+    n0, f0 = _axis(nf, q, 8, oy, iy, n0, f0)
+    n1, f1 = _axis(nf, q, 9, oy, iy, n1, f1)
+    n2, f2 = _axis(nf, q, 10, oy, iy, n2, f2)
+    n3, f3 = _axis(nf, q, 11, oy, iy, n3, f3)
+    n4, f4 = _axis(nf, q, 12, oy, iy, n4, f4)
+    n5, f5 = _axis(nf, q, 13, oy, iy, n5, f5)
+    n6, f6 = _axis(nf, q, 14, oy, iy, n6, f6)
+    n7, f7 = _axis(nf, q, 15, oy, iy, n7, f7)
+    n0, f0 = _axis(nf, q, 16, oz, iz, n0, f0)
+    n1, f1 = _axis(nf, q, 17, oz, iz, n1, f1)
+    n2, f2 = _axis(nf, q, 18, oz, iz, n2, f2)
+    n3, f3 = _axis(nf, q, 19, oz, iz, n3, f3)
+    n4, f4 = _axis(nf, q, 20, oz, iz, n4, f4)
+    n5, f5 = _axis(nf, q, 21, oz, iz, n5, f5)
+    n6, f6 = _axis(nf, q, 22, oz, iz, n6, f6)
+    n7, f7 = _axis(nf, q, 23, oz, iz, n7, f7)
+    dist[0] = _widen(n0, f0, s)
+    dist[1] = _widen(n1, f1, s)
+    dist[2] = _widen(n2, f2, s)
+    dist[3] = _widen(n3, f3, s)
+    dist[4] = _widen(n4, f4, s)
+    dist[5] = _widen(n5, f5, s)
+    dist[6] = _widen(n6, f6, s)
+    dist[7] = _widen(n7, f7, s)
+
+
+@njit(**_INLINE)
+def _slots(ni, row):
+    """How many of row's eight slots hold a child (for the count of boxes tested)."""
+    k = row * _ROW + np.uint64(56)
+    return ((ni[k] != -2) + (ni[k + np.uint64(1)] != -2) + (ni[k + np.uint64(2)] != -2) + (ni[k + np.uint64(3)] != -2)
+            + (ni[k + np.uint64(4)] != -2) + (ni[k + np.uint64(5)] != -2) + (ni[k + np.uint64(6)] != -2)
+            + (ni[k + np.uint64(7)] != -2))
 
 
 @njit(**_INLINE)
@@ -210,11 +293,12 @@ def _closest_one(ox, oy, oz, dx, dy, dz, nf, ni, order, ltri, use_bvh, nsph, sph
                  snear, dist):
     """The nearest hit of one ray: (t, primitive number, nodes visited, primitive tests); (inf, -1) on a miss.
 
-    The hierarchy is four-wide (see ``hierarchy.four_wide``): nf/ni are flat float32 and int32 views of
-    the same 32-word rows, indexed unsigned (no negative-index wraparound, no stride loads); row 0 holds
+    The hierarchy is eight-wide (see ``hierarchy.eight_wide``): nf/ni are flat float32 and int32 views of
+    the same 64-word rows, indexed unsigned (no negative-index wraparound, no stride loads); row 0 holds
     the root alone; ``ltri`` holds the triangles slot by slot (ltri[j] is triangle order[j] - nsph). The
-    stack keeps each waiting child's row (or first slot), kind and entry distance. A row whose ray enters
-    one or two children takes the nearer next without sorting; three or four are sorted.
+    boxes are tested in float32, widened so that none the ray enters is missed (``_widen``); the hit itself
+    is found in float64. The stack keeps each waiting child's row (or first slot), kind and entry distance.
+    A row whose ray enters one or two children takes the nearer next without sorting; more are sorted.
     """
     ix, iy, iz, kx, ky, kz, sx, sy, sz, okx, oky, okz = _setup(ox, oy, oz, dx, dy, dz, use_bvh, tri.shape[0] > 0)
     nb = nsph + tri.shape[0]
@@ -243,14 +327,16 @@ def _closest_one(ox, oy, oz, dx, dy, dz, nf, ni, order, ltri, use_bvh, nsph, sph
                 best = t
                 prim = k
         return best, prim, nodes, tests
-    sp = 0
     nodes += 1
-    t = _slabs(nf, np.uint64(0), 0, ox, oy, oz, ix, iy, iz, best)  # row 0 holds the root alone
-    if t < math.inf:
-        stack[0] = ni[24]
-        scnt[0] = ni[28]
-        snear[0] = t
-        sp = 1
+    t = _root(nf, ox, oy, oz, ix, iy, iz, best)  # row 0 holds the root alone
+    if t == math.inf:
+        return best, prim, nodes, tests
+    ox32, oy32, oz32, ix32, iy32, iz32, s32 = _ray32(ox, oy, oz, ix, iy, iz)  # only for rays that enter the root
+    t32 = _up32(best)
+    stack[0] = ni[48]
+    scnt[0] = ni[56]
+    snear[0] = t
+    sp = 1
     q = 0
     cnt = 0
     go = False  # True: (q, cnt) is the next node, taken without a trip through the stack
@@ -270,57 +356,61 @@ def _closest_one(ox, oy, oz, dx, dy, dz, nf, ni, order, ltri, use_bvh, nsph, sph
                 if 0.0 < t < best:
                     best = t
                     prim = k
+                    t32 = _up32(best)
             continue
         row = np.uint64(q)  # unsigned: no negative-index wraparound on the row's loads
-        _slabs4(nf, row, ox, oy, oz, ix, iy, iz, best, dist)
-        nodes += (ni[row * _ROW + np.uint64(28)] != -2) + (ni[row * _ROW + np.uint64(29)] != -2) + (ni[row * _ROW + np.uint64(30)] != -2) + (ni[row * _ROW + np.uint64(31)] != -2)
-        d0, d1, d2, d3 = dist[0], dist[1], dist[2], dist[3]
-        h0, h1, h2, h3 = d0 < math.inf, d1 < math.inf, d2 < math.inf, d3 < math.inf
-        entered = np.int64(h0) + np.int64(h1) + np.int64(h2) + np.int64(h3)
-        if entered == 0:
+        _slabs8(nf, row, ox32, oy32, oz32, ix32, iy32, iz32, t32, s32, dist)
+        nodes += _slots(ni, row)
+        m = 0                                    # how many children the ray enters; a, b: the first two
+        a = np.uint64(0)
+        b = np.uint64(0)
+        for c in range(8):
+            entered = dist[np.uint64(c)] < math.inf
+            b = np.uint64(c) if entered and m == 1 else b
+            a = np.uint64(c) if entered and m == 0 else a
+            m += entered
+        if m == 0:
             continue
-        if entered == 1:                         # the one child is next
-            c = 0 if h0 else (1 if h1 else (2 if h2 else 3))
-            q = ni[row * _ROW + np.uint64(24 + c)]
-            cnt = ni[row * _ROW + np.uint64(28 + c)]
+        if m == 1:                               # the one child is next
+            q = ni[row * _ROW + np.uint64(48) + a]
+            cnt = ni[row * _ROW + np.uint64(56) + a]
             go = True
             continue
-        if entered == 2:                         # the nearer is next, the other waits (on a tie, the lower slot first)
-            a = 0 if h0 else (1 if h1 else 2)
-            b = 3 if h3 else (2 if h2 else 1)
+        if m == 2:                               # the nearer is next, the other waits (on a tie, the lower slot first)
             near, far = (b, a) if dist[b] < dist[a] else (a, b)
-            stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(24 + far)]
-            scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(28 + far)]
-            snear[np.uint64(sp)] = dist[far]
+            far_t = dist[far]
+            stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(48) + far]
+            scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(56) + far]
+            snear[np.uint64(sp)] = far_t
             sp += 1
-            q = ni[row * _ROW + np.uint64(24 + near)]
-            cnt = ni[row * _ROW + np.uint64(28 + near)]
+            q = ni[row * _ROW + np.uint64(48) + near]
+            cnt = ni[row * _ROW + np.uint64(56) + near]
             go = True
             continue
-        # three or four: sort them by entry distance (then slot)
-        c0, c1, c2, c3 = 0, 1, 2, 3
-        d0, c0, d1, c1 = _order(d0, c0, d1, c1)
-        d2, c2, d3, c3 = _order(d2, c2, d3, c3)
-        d0, c0, d2, c2 = _order(d0, c0, d2, c2)
-        d1, c1, d3, c3 = _order(d1, c1, d3, c3)
-        d1, c1, d2, c2 = _order(d1, c1, d2, c2)
-        # the others wait on the stack, far to near; a missed child (inf) is overwritten
-        stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(24 + c3)]
-        scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(28 + c3)]
-        snear[np.uint64(sp)] = d3
-        sp += d3 < math.inf
-        stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(24 + c2)]
-        scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(28 + c2)]
-        snear[np.uint64(sp)] = d2
-        sp += d2 < math.inf
-        stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(24 + c1)]
-        scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(28 + c1)]
-        snear[np.uint64(sp)] = d1
-        sp += d1 < math.inf
-        if d0 < math.inf:  # the nearest child is next
-            q = ni[row * _ROW + np.uint64(24 + c0)]
-            cnt = ni[row * _ROW + np.uint64(28 + c0)]
-            go = True
+        m = 0                                    # more: the entered ones, in slot order, to dist[8:16] and [16:24],
+        for c in range(8):                       # then an insertion sort by distance (stable: slots ascend on ties)
+            dist[np.uint64(8 + m)] = dist[np.uint64(c)]
+            dist[np.uint64(16 + m)] = c
+            m += dist[np.uint64(c)] < math.inf
+        for i in range(9, 8 + m):
+            dv, cv = dist[i], dist[i + 8]
+            j = i - 1
+            while j >= 8 and dist[j] > dv:
+                dist[j + 1] = dist[j]
+                dist[j + 9] = dist[j + 8]
+                j -= 1
+            dist[j + 1] = dv
+            dist[j + 9] = cv
+        for i in range(7 + m, 8, -1):            # the others wait, far to near
+            c = np.uint64(dist[i + 8])
+            stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(48) + c]
+            scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(56) + c]
+            snear[np.uint64(sp)] = dist[i]
+            sp += 1
+        c = np.uint64(dist[16])                  # the nearest is next
+        q = ni[row * _ROW + np.uint64(48) + c]
+        cnt = ni[row * _ROW + np.uint64(56) + c]
+        go = True
     return best, prim, nodes, tests
 
 
@@ -397,6 +487,7 @@ def _transmit_one(ox, oy, oz, dx, dy, dz, tmax, nf, ni, order, ltri, use_bvh, ns
     nodes = 0
     tests = 0
     blocked = False
+    ox32 = oy32 = oz32 = ix32 = iy32 = iz32 = s32 = t32 = _F0
     for p in range(planes.shape[0]):
         tests += 1
         dn = dx * planes[p, 3] + dy * planes[p, 4] + dz * planes[p, 5]
@@ -410,8 +501,13 @@ def _transmit_one(ox, oy, oz, dx, dy, dz, tmax, nf, ni, order, ltri, use_bvh, ns
                     return 0.0, 0.0, 0.0, nodes, tests
     sp = 0
     if use_bvh:
-        stack[0] = 0
-        scnt[0] = -1
+        nodes += 1
+        if _root(nf, ox, oy, oz, ix, iy, iz, tmax) == math.inf:   # row 0 holds the root alone
+            return T0, T1, T2, nodes, tests
+        ox32, oy32, oz32, ix32, iy32, iz32, s32 = _ray32(ox, oy, oz, ix, iy, iz)  # only for rays that enter it
+        t32 = _up32(tmax)
+        stack[0] = ni[48]
+        scnt[0] = ni[56]
         sp = 1
         first, last = 0, 0
     else:
@@ -425,11 +521,11 @@ def _transmit_one(ox, oy, oz, dx, dy, dz, tmax, nf, ni, order, ltri, use_bvh, ns
             cnt = scnt[np.uint64(sp)]
             if cnt < 0:                    # a row: its children wait on the stack, the last slot on top
                 row = np.uint64(q)
-                _slabs4(nf, row, ox, oy, oz, ix, iy, iz, tmax, dist)
-                nodes += (ni[row * _ROW + np.uint64(28)] != -2) + (ni[row * _ROW + np.uint64(29)] != -2) + (ni[row * _ROW + np.uint64(30)] != -2) + (ni[row * _ROW + np.uint64(31)] != -2)
-                for c in range(4):
-                    stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(24 + c)]
-                    scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(28 + c)]
+                _slabs8(nf, row, ox32, oy32, oz32, ix32, iy32, iz32, t32, s32, dist)
+                nodes += _slots(ni, row)
+                for c in range(8):
+                    stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(48 + c)]
+                    scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(56 + c)]
                     sp += dist[c] < math.inf
                 continue
             first, last = q, q + cnt

@@ -41,7 +41,7 @@ def _say() -> None:
 def compiled(kernel: Any, args: tuple) -> None:
     """Compile (or load from numba's cache) kernel for these arguments with LLVM's SLP vectoriser on.
 
-    Numba leaves it off by default; it lets ``kernels._slabs4`` test four boxes in a few vector
+    Numba leaves it off by default; it lets ``kernels._slabs8`` test eight boxes in a few vector
     instructions. The switch is numba's own config value, set only while this compiles (results are the
     same either way).
     """
