@@ -175,26 +175,33 @@ def test07_camera_inside_a_glass_sphere(ref):
     assert np.isfinite(image).all() and counters["transmission"] > 0
 
 
-def test08_numpy_and_compiled_paths_agree(ref):
+def both_paths(ref, ts, o, d) -> tuple[tuple, tuple]:
+    """(t, primitive, normal, shadow transmittance) of each ray by the numpy path and by the compiled kernels;
+    the shadow rays run from halfway to each hit (or one unit along a miss) to the first light."""
     wave = importlib.import_module(ref.__name__ + ".wavefront")
     bvh = importlib.import_module(ref.__name__ + ".bvh")
+    saved = bvh.COMPILED_RAYS
+    bvh.COMPILED_RAYS = 0
+    try:
+        t2, p2, n2 = ref.closest_hit(ts, o, d)
+        x = o + np.where(np.isfinite(t2), t2 * 0.5, 1.0)[:, None] * d
+        target = np.tile(ts.light_position[0], (len(o), 1))
+        s2 = ref.shadow_transmission(ts, x, target)
+    finally:
+        bvh.COMPILED_RAYS = saved
+    t1, p1, n1, _, _ = wave.closest(ts, o, d)
+    seg = target - x
+    dist = np.linalg.norm(seg, axis=1)
+    s1, _, _ = wave.transmission(ts, x, seg / dist[:, None], dist)
+    return (t1, p1, n1, s1), (t2, p2, n2, s2)
+
+
+def test08_numpy_and_compiled_paths_agree(ref):
     for name in ("rippled-torus", "whitted", "cornell-box"):
         sc = load_scene(name)
         ts = whitted.prepare(sc, ref)
         o, d = ref.camera_rays(sc.camera, 64, 48)
-        t1, p1, n1, _, _ = wave.closest(ts, o, d)
-        saved = bvh.COMPILED_RAYS
-        bvh.COMPILED_RAYS = 0
-        try:
-            t2, p2, n2 = ref.closest_hit(ts, o, d)
-            x = o + np.where(np.isfinite(t2), t2 * 0.5, 1.0)[:, None] * d
-            target = np.tile(ts.light_position[0], (len(o), 1))
-            s2 = ref.shadow_transmission(ts, x, target)
-        finally:
-            bvh.COMPILED_RAYS = saved
-        seg = target - x
-        dist = np.linalg.norm(seg, axis=1)
-        s1, _, _ = wave.transmission(ts, x, seg / dist[:, None], dist)
+        (t1, p1, n1, s1), (t2, p2, n2, s2) = both_paths(ref, ts, o, d)
         assert np.array_equal(p1, p2) and np.allclose(t1, t2, rtol=1e-12) and np.allclose(n1, n2)
         assert np.allclose(s1, s2)
 
@@ -283,8 +290,6 @@ def test11_the_float32_box_test_loses_no_hit(ref, offset):
     float32 step (0.06 at 1e6) is wider than the torus's triangles, and axis-parallel rays aimed at the mesh's
     vertices run along box faces with exact zeros in their directions: every hit must still be the float64
     numpy path's, and every shadow ray's transmittance too."""
-    wave = importlib.import_module(ref.__name__ + ".wavefront")
-    bvh = importlib.import_module(ref.__name__ + ".bvh")
     sc = parse_scene(translated(bundled("rippled-torus"), offset), "rippled-torus moved")
     ts = whitted.prepare(sc, ref)
     assert ts.bvh is not None
@@ -294,23 +299,11 @@ def test11_the_float32_box_test_loses_no_hit(ref, offset):
     axis = np.repeat(np.eye(3), 2000, axis=0) * rng.choice([-1.0, 1.0], (6000, 1))
     o = np.concatenate([o, vertex - 0.5 * axis])       # aimed at a vertex along x, y or z, grazing box faces
     d = np.concatenate([d, axis])
-    t1, p1, _, _, _ = wave.closest(ts, o, d)
-    saved = bvh.COMPILED_RAYS
-    bvh.COMPILED_RAYS = 0
-    try:
-        t2, p2, _ = ref.closest_hit(ts, o, d)
-        x = o + np.where(np.isfinite(t2), t2 * 0.5, 1.0)[:, None] * d
-        target = np.tile(ts.light_position[0], (len(o), 1))
-        s2 = ref.shadow_transmission(ts, x, target)
-    finally:
-        bvh.COMPILED_RAYS = saved
+    (t1, p1, _, s1), (t2, p2, _, s2) = both_paths(ref, ts, o, d)
     hit1, hit2 = np.isfinite(t1), np.isfinite(t2)
     assert hit2[-6000:].mean() > 0.75                   # most vertex rays hit (some only graze the surface)
     assert np.array_equal(hit1, hit2), f"{np.sum(hit1 != hit2)} rays hit in one path and not the other"
     assert np.allclose(t1[hit1], t2[hit1], rtol=1e-12, atol=0)
     camera = slice(0, len(o) - 6000)                    # (a vertex is shared: any of its triangles may be named)
     assert np.mean(p1[camera] == p2[camera]) > 0.999
-    seg = target - x
-    dist = np.linalg.norm(seg, axis=1)
-    s1, _, _ = wave.transmission(ts, x, seg / dist[:, None], dist)
     assert np.array_equal(s1, s2)
