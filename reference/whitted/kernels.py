@@ -169,8 +169,8 @@ def _root(nf, ox, oy, oz, ix, iy, iz, tmax):
 @njit(**_INLINE)
 def _inv32(inv):
     """An inverse direction component for the float32 test: rounded, inf where the ray is parallel to the
-    axis, and NaN where it is not but float32 cannot hold it (|inv| >= 1e38): NaN slab distances are passed
-    over by ``_axis``, so that axis then lets the ray into every box (more boxes, never fewer)."""
+    axis, and NaN where it is not but is near or past float32's largest number (|inv| >= 1e38): NaN slab
+    distances are passed over by ``_axis``, so that axis then lets the ray into every box (more, never fewer)."""
     if abs(inv) < 1e38 or abs(inv) == math.inf:
         return np.float32(inv)
     return np.float32(math.nan)
