@@ -25,12 +25,11 @@ import numpy as np
 from cs451 import KIT_ROOT
 from cs451.impl import load_impl, resolve_impl
 from cs451.progress import Progress
-from cs451.raytrace import SPAWN_OFFSET
 from cs451.scene import load_scene
 from cs451.stages import whitted as stage
 
 from .whitted import _query_rays, _torus_only
-from .whitted_kernels import frame_rays, reference_parts
+from .whitted_kernels import closest_shared, frame_rays, reference_parts, shadow_shared
 
 
 def _module_at(rev: str, path: str, name: str, folder: Path) -> ModuleType:
@@ -84,16 +83,9 @@ class _Kernels:
     def __init__(self, kernels: ModuleType, ts, tree: tuple, impl: ModuleType):
         ref = reference_parts(impl)
         self.k, self.ts, self.run = kernels, ts, ref.running.in_threads
-        p = ref.hierarchy.packed(ts)
-        self.closest_args = (*tree, p["nsph"], p["sph"], p["tri"], p["planes"], p["tri_normal"])
-        self.shadow_args = (*tree, p["nsph"], p["sph"], p["tri"], p["planes"], p["frame"], ts.plane_checker,
-                            ts.plane_checker_material, ts.prim_material, ts.mat_transmittance)
-        mats, lights = importlib.import_module(impl.__name__ + ".frame").frame_arrays(ts)
-        self.frame_args = (*self.closest_args, p["frame"], ts.plane_checker, ts.plane_checker_material,
-                           ts.prim_material, np.ascontiguousarray(ts.mat_transmittance), mats, lights,
-                           np.ascontiguousarray(ts.ambient_light, np.float64),
-                           np.ascontiguousarray(ts.background, np.float64), int(ts.max_depth), float(ts.min_weight),
-                           SPAWN_OFFSET)
+        self.closest_args = closest_shared(ref, ts, tree)
+        self.shadow_args = shadow_shared(ref, ts, tree)
+        self.frame_args = importlib.import_module(impl.__name__ + ".frame").frame_shared(ts, tree)
 
     def closest(self, o, d):
         n = len(o)

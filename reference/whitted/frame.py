@@ -33,6 +33,18 @@ def frame_arrays(scene: TraceScene) -> tuple[np.ndarray, np.ndarray]:
     return mats, lights
 
 
+def frame_shared(scene: TraceScene, tree: tuple | None = None) -> tuple:
+    """The frame kernel's arguments that every ray shares: the scene's geometry, hierarchy (``tree``: another
+    layout of it, for the bench; the scene's own by default), materials, lights and options."""
+    p = packed(scene)
+    mats, lights = frame_arrays(scene)
+    return (*(p["tree"] if tree is None else tree), p["nsph"], p["sph"], p["tri"], p["planes"], p["tri_normal"],
+            p["frame"], scene.plane_checker, scene.plane_checker_material, scene.prim_material,
+            np.ascontiguousarray(scene.mat_transmittance), mats, lights,
+            np.ascontiguousarray(scene.ambient_light, np.float64), np.ascontiguousarray(scene.background, np.float64),
+            int(scene.max_depth), float(scene.min_weight), SPAWN_OFFSET)
+
+
 def trace_frame(scene: TraceScene, origins: np.ndarray, directions: np.ndarray,
                 threads: int | None = None) -> np.ndarray:
     """``tracer.trace`` in one compiled kernel: the colour (n, 3) along each camera ray, counters updated.
@@ -43,17 +55,10 @@ def trace_frame(scene: TraceScene, origins: np.ndarray, directions: np.ndarray,
     o = np.ascontiguousarray(origins, dtype=np.float64)
     d = np.ascontiguousarray(directions, dtype=np.float64)
     n = len(o)
-    p = packed(scene)
-    mats, lights = frame_arrays(scene)
     colour = np.empty((n, 3))
     counts = np.empty((n, 5), np.int64)
-    shared = (*p["tree"], p["nsph"], p["sph"], p["tri"], p["planes"], p["tri_normal"], p["frame"],
-              scene.plane_checker, scene.plane_checker_material, scene.prim_material,
-              np.ascontiguousarray(scene.mat_transmittance), mats, lights,
-              np.ascontiguousarray(scene.ambient_light, np.float64), np.ascontiguousarray(scene.background, np.float64),
-              int(scene.max_depth), float(scene.min_weight), SPAWN_OFFSET)
-    in_threads(K.frame, n, (o, d), shared, (colour, counts), K.scratch(int(scene.max_depth)), threads=threads,
-               chunks=16)
+    in_threads(K.frame, n, (o, d), frame_shared(scene), (colour, counts), K.scratch(int(scene.max_depth)),
+               threads=threads, chunks=16)
     total = np.einsum("ij->j", counts)   # the column sums; 4x faster than counts.sum(axis=0) on (n, 5) int64
     scene.counters["camera"] += n
     for k, name in enumerate(("shadow", "reflection", "transmission", "nodes_visited", "tests")):
