@@ -38,7 +38,7 @@ from cs451.scene import load_scene, parse_scene
 from cs451.stages import whitted as stage
 
 from .whitted_demo import demo_speed, print_demo_speed
-from .whitted_frames import frames, print_frames
+from .whitted_frames import frames, print_frames, print_time_split
 from .whitted_kernels import best_of, closest_queries, reference_parts
 from .whitted_kernels import threads as threads_of
 
@@ -292,6 +292,9 @@ def summary(speed: dict, frame_rows: list[dict], demo_rows: list[dict]) -> list[
         lines.append(f"| the same frames against the kernels on the frame's own rays (closest hit and shadow), {on} | "
                      f"{each(f'frame_{t}t_Mrays')} | kernels {each(f'own_rays_{t}t_Mrays')} | "
                      f"{each(f'frame_over_own_rays_{t}t')} |")
+        lines.append(f"| the same frames with camera rays only (no lights, no recursion), {on} (s); its share spent on "
+                     f"the lights | {each(f'camera_only_{t}t_s', '.4f')}; lights {each(f'lights_share_{t}t', '.0%')} | "
+                     f"kernel on the same rays | {each(f'camera_only_over_kernel_{t}t')} |")
         lines.append(f"| `render_traced` (with the scene to arrays), {on} (s) | {each(f'render_{t}t_s', '.3f')} | - | - |")
         if f"mitsuba_{t}t_s" in frame_rows[0]:
             lines.append(f"| the same frames beside Mitsuba 3 direct lighting, {on} (s) | {each(f'frame_{t}t_s', '.3f')} "
@@ -333,6 +336,7 @@ def main(output: Path, quick: bool = False) -> dict:
     for kind, r in speed["kinds"].items():
         print(f"{kind:<8} {r['rays']:>8} " + " ".join(f"{r[c]:>16.3f}" if c in r else f"{'-':>16}" for c in cols))
     print_frames(frame_rows)
+    print_time_split(frame_rows)
     print_demo_speed(demo_rows)
     table = summary(speed, frame_rows, demo_rows)
     print("\nsummary (each ratio measured side by side in this run)\n" + "\n".join(table))

@@ -9,10 +9,14 @@ the machine's load weighs on every column alike (best of the repetitions):
 - kernel: the closest-hit kernel alone on the frame's camera rays (the issue's yardstick), and on the
   frame's own rays (every closest-hit query and every shadow ray it casts, each through its kernel);
 - Mitsuba 3 (``scalar_rgb``): the same scene's direct-lighting frame, same size and samples, as many
-  shadow rays per point as the kit (``whitted_mitsuba``).
+  shadow rays per point as the kit (``whitted_mitsuba``);
+- where the frame's time goes: the same frame with no lights and no recursion (camera rays only: the
+  frame's own overhead per ray, against the kernel on the same rays), then with the recursion but no
+  lights, so that the rest is the lights' shadow rays and shading.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import tempfile
 from pathlib import Path
@@ -27,6 +31,8 @@ from .whitted_kernels import best_of, closest_queries, frame_rays, reference_par
 
 SIZE = (320, 240)
 RAY_KINDS = ("camera", "shadow", "reflection", "transmission")
+#: The light samples' arrays: emptied for the frame with no lights (where its time goes).
+LIGHT_FIELDS = ("light_position", "light_diffuse", "light_specular", "light_attenuation", "light_normal")
 
 
 def _mitsuba_frame(scene, ts, spp: int, folder: Path):
@@ -67,8 +73,11 @@ def _timers(impl: ModuleType, ref, scene, ts, spp: int, mitsuba) -> tuple[dict, 
         closest(*own["closest"])
         shadow(*own["shadow"])
 
+    dark = dataclasses.replace(ts, counters=dict.fromkeys(ts.counters, 0), **{f: getattr(ts, f)[:0] for f in LIGHT_FIELDS})
+    flat = dataclasses.replace(dark, max_depth=0)
     timers = {"frame": frame, "render": lambda _: stage.render_traced(scene, impl, SIZE, spp=spp),
-              "kernel": lambda _: closest(o, d), "own_rays": own_rays}
+              "kernel": lambda _: closest(o, d), "own_rays": own_rays,
+              "camera_only": lambda _: impl.trace(flat, o, d), "no_lights": lambda _: impl.trace(dark, o, d)}
     if mitsuba is not None:
         timers["mitsuba"] = mitsuba
     return timers, len(o), len(own["closest"][0]) + len(own["shadow"][0])
@@ -105,6 +114,8 @@ def frames(impl: ModuleType, quick: bool, spp: int = 1) -> list[dict]:
             row[f"own_rays_{n}t_Mrays"] = rays / best[f"own_rays_{n}t_s"] / 1e6
             row[f"frame_over_kernel_{n}t"] = row[f"frame_{n}t_Mrays"] / row[f"kernel_{n}t_Mrays"]
             row[f"frame_over_own_rays_{n}t"] = row[f"frame_{n}t_Mrays"] / row[f"own_rays_{n}t_Mrays"]
+            row[f"camera_only_over_kernel_{n}t"] = best[f"kernel_{n}t_s"] / best[f"camera_only_{n}t_s"]
+            row[f"lights_share_{n}t"] = 1 - best[f"no_lights_{n}t_s"] / best[f"frame_{n}t_s"]
             if "mitsuba_1t_s" in best:
                 row[f"frame_over_mitsuba_time_{n}t"] = best[f"frame_{n}t_s"] / best[f"mitsuba_{n}t_s"]
         rows.append(row)
@@ -129,3 +140,16 @@ def print_frames(rows: list[dict]) -> None:
             if mitsuba:
                 line += f" {r[f'mitsuba_{n}t_s'] * 1e3:>10.1f} {r[f'frame_over_mitsuba_time_{n}t']:>11.2f}"
             print(line)
+
+
+def print_time_split(rows: list[dict]) -> None:
+    print("\nwhere a frame's time goes (320×240, 1 spp): camera rays only (no lights, no recursion; against the "
+          "closest-hit kernel on the same rays), then with reflection and refraction, then the whole frame: the "
+          "rest is the lights (shadow rays and shading)")
+    print(f"{'scene':<16} {'thr':>3} {'camera only ms':>14} {'kernel/camera-only':>18} {'+ recursion ms':>14} "
+          f"{'whole frame ms':>14} {'lights share':>12}")
+    for r in rows:
+        for n in (1, 2):
+            print(f"{r['scene']:<16} {n:>3} {r[f'camera_only_{n}t_s'] * 1e3:>14.1f} "
+                  f"{r[f'camera_only_over_kernel_{n}t']:>18.2f} {r[f'no_lights_{n}t_s'] * 1e3:>14.1f} "
+                  f"{r[f'frame_{n}t_s'] * 1e3:>14.1f} {r[f'lights_share_{n}t']:>12.0%}")
