@@ -29,7 +29,7 @@ from cs451.scene import load_scene
 from cs451.stages import whitted as stage
 
 from .whitted import _query_rays, _torus_only
-from .whitted_kernels import closest_shared, frame_rays, reference_parts, shadow_shared
+from .whitted_kernels import frame_rays, reference_parts
 
 
 def _module_at(rev: str, path: str, name: str, folder: Path) -> ModuleType:
@@ -83,8 +83,8 @@ class _Kernels:
     def __init__(self, kernels: ModuleType, ts, tree: tuple, impl: ModuleType):
         ref = reference_parts(impl)
         self.k, self.ts, self.run = kernels, ts, ref.running.in_threads
-        self.closest_args = closest_shared(ref, ts, tree)
-        self.shadow_args = shadow_shared(ref, ts, tree)
+        self.closest_args = ref.hierarchy.closest_args(ts, tree)
+        self.shadow_args = ref.hierarchy.shadow_args(ts, tree)
         self.frame_args = importlib.import_module(impl.__name__ + ".frame").frame_shared(ts, tree)
 
     def closest(self, o, d):

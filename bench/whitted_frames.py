@@ -61,9 +61,9 @@ def _timers(impl: ModuleType, ref, scene, ts, spp: int, mitsuba) -> tuple[dict, 
     number of rays the frame casts, recorded."""
     k = math.isqrt(spp)
     w, h = SIZE
-    o, d = impl.camera_rays(scene.camera, w, h)
+    o, d = impl.camera_rays(scene.camera, w * k, h * k)   # the frame's camera rays, k × k a pixel
     closest, shadow = closest_queries(ref, ts), shadow_queries(ref, ts)
-    own = frame_rays(ref, ts, *impl.camera_rays(scene.camera, w * k, h * k))
+    own = frame_rays(ref, ts, o, d)
 
     def frame(_: int) -> None:
         origins, directions = impl.camera_rays(scene.camera, w * k, h * k)

@@ -35,22 +35,9 @@ def reference_parts(impl: ModuleType) -> SimpleNamespace:
                            bvh=part("bvh"), tracer=part("tracer"))
 
 
-def closest_shared(ref: SimpleNamespace, ts: TraceScene, tree: tuple | None = None) -> tuple:
-    """The closest-hit kernel's arguments that every ray shares (``tree``: another layout of the hierarchy)."""
-    p = ref.hierarchy.packed(ts)
-    return (*(p["tree"] if tree is None else tree), p["nsph"], p["sph"], p["tri"], p["planes"], p["tri_normal"])
-
-
-def shadow_shared(ref: SimpleNamespace, ts: TraceScene, tree: tuple | None = None) -> tuple:
-    """The shadow-ray kernel's arguments that every ray shares (``tree``: another layout of the hierarchy)."""
-    p = ref.hierarchy.packed(ts)
-    return (*(p["tree"] if tree is None else tree), p["nsph"], p["sph"], p["tri"], p["planes"], p["frame"],
-            ts.plane_checker, ts.plane_checker_material, ts.prim_material, ts.mat_transmittance)
-
-
 def closest_queries(ref: SimpleNamespace, ts: TraceScene) -> Callable[[np.ndarray, np.ndarray], tuple]:
     """Closest-hit queries through the compiled kernel alone; the function returns (t, prim, stats)."""
-    shared = closest_shared(ref, ts)
+    shared = ref.hierarchy.closest_args(ts)
 
     def run(o: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         n = len(o)
@@ -62,7 +49,7 @@ def closest_queries(ref: SimpleNamespace, ts: TraceScene) -> Callable[[np.ndarra
 
 def shadow_queries(ref: SimpleNamespace, ts: TraceScene) -> Callable[[np.ndarray, np.ndarray, np.ndarray], None]:
     """Shadow-ray queries (origins, unit directions, lengths) through the compiled any-hit kernel alone."""
-    shared = shadow_shared(ref, ts)
+    shared = ref.hierarchy.shadow_args(ts)
 
     def run(o: np.ndarray, d: np.ndarray, dist: np.ndarray) -> None:
         n = len(o)

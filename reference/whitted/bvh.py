@@ -73,16 +73,14 @@ def closest_hit(scene: TraceScene, origins: np.ndarray, directions: np.ndarray) 
         scene.counters["nodes_visited"] += int(nodes)
         scene.counters["tests"] += int(tests)
         return t, prim, normals
-    from .hierarchy import packed
+    from .hierarchy import closest_args
     from .kernels import closest, scratch
     from .running import in_threads
-    p = packed(scene)
     t = np.empty(n)
     prim = np.empty(n, np.int64)
     normals = np.empty((n, 3))
     stats = np.empty((n, 2), np.int64)
-    in_threads(closest, n, (o, d), (*p["tree"], p["nsph"], p["sph"], p["tri"], p["planes"], p["tri_normal"]),
-               (t, prim, normals, stats), scratch())
+    in_threads(closest, n, (o, d), closest_args(scene), (t, prim, normals, stats), scratch())
     scene.counters["nodes_visited"] += int(stats[:, 0].sum())
     scene.counters["tests"] += int(stats[:, 1].sum())
     return t, prim, normals

@@ -10,7 +10,7 @@ import numpy as np
 from cs451.raytrace import SPAWN_OFFSET, TraceScene
 
 from . import kernels as K
-from .hierarchy import packed
+from .hierarchy import closest_args, packed
 from .running import in_threads
 
 
@@ -36,10 +36,8 @@ def frame_arrays(scene: TraceScene) -> tuple[np.ndarray, np.ndarray]:
 def frame_shared(scene: TraceScene, tree: tuple | None = None) -> tuple:
     """The frame kernel's arguments that every ray shares: the scene's geometry, hierarchy (``tree``: another
     layout of it, for the bench; the scene's own by default), materials, lights and options."""
-    p = packed(scene)
     mats, lights = frame_arrays(scene)
-    return (*(p["tree"] if tree is None else tree), p["nsph"], p["sph"], p["tri"], p["planes"], p["tri_normal"],
-            p["frame"], scene.plane_checker, scene.plane_checker_material, scene.prim_material,
+    return (*closest_args(scene, tree), packed(scene)["frame"], scene.plane_checker, scene.plane_checker_material, scene.prim_material,
             np.ascontiguousarray(scene.mat_transmittance), mats, lights,
             np.ascontiguousarray(scene.ambient_light, np.float64), np.ascontiguousarray(scene.background, np.float64),
             int(scene.max_depth), float(scene.min_weight), SPAWN_OFFSET)

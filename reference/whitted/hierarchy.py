@@ -322,4 +322,18 @@ def packed(scene: TraceScene) -> dict:
     out = LAYOUTS.get(content_key(*parts), lambda: _layout(scene, tri))
     scene._reference_packed = out  # type: ignore[attr-defined]
     return out
+
+
+def closest_args(scene: TraceScene, tree: tuple | None = None) -> tuple:
+    """The closest-hit kernel's arguments that every ray shares (``tree``: another layout of the hierarchy,
+    for the bench; the scene's own by default)."""
+    p = packed(scene)
+    return (*(p["tree"] if tree is None else tree), p["nsph"], p["sph"], p["tri"], p["planes"], p["tri_normal"])
+
+
+def shadow_args(scene: TraceScene, tree: tuple | None = None) -> tuple:
+    """The shadow-ray kernel's arguments that every ray shares (``tree`` as for ``closest_args``)."""
+    p = packed(scene)
+    return (*(p["tree"] if tree is None else tree), p["nsph"], p["sph"], p["tri"], p["planes"], p["frame"],
+            scene.plane_checker, scene.plane_checker_material, scene.prim_material, scene.mat_transmittance)
 # END SOLUTION

@@ -40,7 +40,7 @@ def shadow_transmission(scene: TraceScene, origins: np.ndarray, targets: np.ndar
     """
     # BEGIN SOLUTION W7: any-hit traversal that multiplies transmittances and stops at an opaque blocker (handout §W7)
     from .bvh import use_compiled
-    from .hierarchy import packed
+    from .hierarchy import shadow_args
     o = np.ascontiguousarray(origins, dtype=np.float64)
     seg = np.asarray(targets, dtype=np.float64) - o
     dist = np.linalg.norm(seg, axis=1)
@@ -55,12 +55,9 @@ def shadow_transmission(scene: TraceScene, origins: np.ndarray, targets: np.ndar
         return out
     from .kernels import scratch, transmission
     from .running import in_threads
-    p = packed(scene)
     out = np.empty((n, 3))
     stats = np.empty((n, 2), np.int64)
-    in_threads(transmission, n, (o, d, dist),
-               (*p["tree"], p["nsph"], p["sph"], p["tri"], p["planes"], p["frame"], scene.plane_checker,
-                scene.plane_checker_material, scene.prim_material, scene.mat_transmittance), (out, stats), scratch())
+    in_threads(transmission, n, (o, d, dist), shadow_args(scene), (out, stats), scratch())
     scene.counters["shadow"] += n
     scene.counters["nodes_visited"] += int(stats[:, 0].sum())
     scene.counters["tests"] += int(stats[:, 1].sum())
