@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import math
 import numpy as np
-from numba import njit
+from llvmlite import ir
+from numba import njit, types
+from numba.extending import intrinsic
 
 #: The kernels allocate nothing (their stacks come in, see ``scratch``), so they are compiled without numba's
 #: reference counting: an inlined helper's array arguments would otherwise cost atomic increments per call.
@@ -24,14 +26,32 @@ _F0 = np.float32(0.0)
 #: The box test's relative slack in float32, 2^-21 (8 ulps): it covers the three roundings of (b - o)·inv
 #: and the widening's own two (``_widen``), so no box a ray enters in exact arithmetic is missed.
 _SLACK32 = np.float32(2.0 ** -21)
+_INF32 = np.float32(math.inf)
 
 
 def scratch(max_depth: int = 0) -> tuple[np.ndarray, ...]:
     """One thread's working memory for any kernel here: the traversal stack (node, kind, entry distance),
-    a row's eight entry distances then the entered ones sorted (distance, slot), and the frame's waiting
-    rays (origin, direction, weight, depth)."""
-    return (np.empty(STACK, np.int64), np.empty(STACK, np.int64), np.empty(STACK), np.empty(24),
+    a row's eight entry distances then the entered ones sorted (distance, slot; float32, which holds both
+    exactly: the distances come from the float32 box test), and the frame's waiting rays (origin,
+    direction, weight, depth)."""
+    return (np.empty(STACK, np.int64), np.empty(STACK, np.int64), np.empty(STACK), np.empty(24, np.float32),
             np.empty((2 * max_depth + 2, 10)))
+
+
+@intrinsic
+def _popcount(typingctx, x):
+    """The number of set bits of an integer (LLVM's ctpop: one popcnt instruction)."""
+    if not isinstance(x, types.Integer):
+        return None
+    return x(x), lambda context, builder, sig, args: builder.ctpop(args[0])
+
+
+@intrinsic
+def _lowest(typingctx, x):
+    """The position of an integer's lowest set bit (LLVM's cttz: one tzcnt instruction); x must not be 0."""
+    if not isinstance(x, types.Integer):
+        return None
+    return x(x), lambda context, builder, sig, args: builder.cttz(args[0], ir.Constant(ir.IntType(1), 1))
 
 
 @njit(**_INLINE)
@@ -221,20 +241,23 @@ def _axis(nf, q, col, o, inv, t0, t1):
 
 @njit(**_INLINE)
 def _widen(n, f, s):
-    """A child's entry distance (float64), or inf: (n, f) widened by the float32 test's error bound first,
-    |t|·2^-21 + s on each side, so that the test can only let in more than exact arithmetic would."""
+    """A child's entry distance (float32, inf where it is not entered) and 1 where it is: (n, f) widened by
+    the float32 test's error bound first, |t|·2^-21 + s on each side, so that the test can only let in more
+    than exact arithmetic would."""
     nc = n - (abs(n) * _SLACK32 + s)
     fc = f + (abs(f) * _SLACK32 + s)
-    return np.float64(nc) if nc <= fc else math.inf
+    entered = nc <= fc
+    return (nc if entered else _INF32), np.uint32(entered)
 
 
 @njit(**_INLINE)
 def _slabs8(nf, q, ox, oy, oz, ix, iy, iz, tmax, s, dist):
     """dist[c] = entry distance into child c's box of row q, or inf, for the eight children, in float32
-    (ray from ``_ray32``, tmax from ``_up32``).
+    (ray from ``_ray32``, tmax from ``_up32``); returns the children entered as bits (bit c: child c).
 
     Written out lane by lane (straight-line, the same operations on columns c = 0..7) so that LLVM's
-    SLP vectoriser can test the eight boxes at once, one AVX register per plane (see ``running.compiled``).
+    SLP vectoriser can test the eight boxes at once, one AVX register per plane (see ``running.compiled``);
+    the distances stay float32 (exactly what the test found) so that all eight fit one register.
     """
     n0, f0 = _axis(nf, q, 0, ox, ix, _F0, tmax)
     n1, f1 = _axis(nf, q, 1, ox, ix, _F0, tmax)
@@ -260,23 +283,30 @@ def _slabs8(nf, q, ox, oy, oz, ix, iy, iz, tmax, s, dist):
     n5, f5 = _axis(nf, q, 21, oz, iz, n5, f5)
     n6, f6 = _axis(nf, q, 22, oz, iz, n6, f6)
     n7, f7 = _axis(nf, q, 23, oz, iz, n7, f7)
-    dist[0] = _widen(n0, f0, s)
-    dist[1] = _widen(n1, f1, s)
-    dist[2] = _widen(n2, f2, s)
-    dist[3] = _widen(n3, f3, s)
-    dist[4] = _widen(n4, f4, s)
-    dist[5] = _widen(n5, f5, s)
-    dist[6] = _widen(n6, f6, s)
-    dist[7] = _widen(n7, f7, s)
+    dist[0], e0 = _widen(n0, f0, s)
+    dist[1], e1 = _widen(n1, f1, s)
+    dist[2], e2 = _widen(n2, f2, s)
+    dist[3], e3 = _widen(n3, f3, s)
+    dist[4], e4 = _widen(n4, f4, s)
+    dist[5], e5 = _widen(n5, f5, s)
+    dist[6], e6 = _widen(n6, f6, s)
+    dist[7], e7 = _widen(n7, f7, s)
+    return (e0 | (e1 << np.uint32(1)) | (e2 << np.uint32(2)) | (e3 << np.uint32(3)) | (e4 << np.uint32(4))
+            | (e5 << np.uint32(5)) | (e6 << np.uint32(6)) | (e7 << np.uint32(7)))
 
 
 @njit(**_INLINE)
 def _slots(ni, row):
-    """How many of row's eight slots hold a child (for the count of boxes tested)."""
+    """How many of row's eight slots hold a child (for the count of boxes tested): the eight comparisons
+    as bits, counted by one popcnt."""
     k = row * _ROW + np.uint64(56)
-    return ((ni[k] != -2) + (ni[k + np.uint64(1)] != -2) + (ni[k + np.uint64(2)] != -2) + (ni[k + np.uint64(3)] != -2)
-            + (ni[k + np.uint64(4)] != -2) + (ni[k + np.uint64(5)] != -2) + (ni[k + np.uint64(6)] != -2)
-            + (ni[k + np.uint64(7)] != -2))
+    return _popcount(np.uint32(ni[k] != -2) | (np.uint32(ni[k + np.uint64(1)] != -2) << np.uint32(1))
+                     | (np.uint32(ni[k + np.uint64(2)] != -2) << np.uint32(2))
+                     | (np.uint32(ni[k + np.uint64(3)] != -2) << np.uint32(3))
+                     | (np.uint32(ni[k + np.uint64(4)] != -2) << np.uint32(4))
+                     | (np.uint32(ni[k + np.uint64(5)] != -2) << np.uint32(5))
+                     | (np.uint32(ni[k + np.uint64(6)] != -2) << np.uint32(6))
+                     | (np.uint32(ni[k + np.uint64(7)] != -2) << np.uint32(7)))
 
 
 @njit(**_INLINE)
@@ -359,24 +389,20 @@ def _closest_one(ox, oy, oz, dx, dy, dz, nf, ni, order, ltri, use_bvh, nsph, sph
                     t32 = _up32(best)
             continue
         row = np.uint64(q)  # unsigned: no negative-index wraparound on the row's loads
-        _slabs8(nf, row, ox32, oy32, oz32, ix32, iy32, iz32, t32, s32, dist)
+        mask = _slabs8(nf, row, ox32, oy32, oz32, ix32, iy32, iz32, t32, s32, dist)
         nodes += _slots(ni, row)
-        m = 0                                    # how many children the ray enters; a, b: the first two
-        a = np.uint64(0)
-        b = np.uint64(0)
-        for c in range(8):
-            entered = dist[np.uint64(c)] < math.inf
-            b = np.uint64(c) if entered and m == 1 else b
-            a = np.uint64(c) if entered and m == 0 else a
-            m += entered
-        if m == 0:
+        if mask == 0:
             continue
-        if m == 1:                               # the one child is next
+        a = np.uint64(_lowest(mask))             # the first two children the ray enters, in slot order
+        rest = mask & (mask - np.uint32(1))
+        if rest == 0:                            # the one child is next
             q = ni[row * _ROW + np.uint64(48) + a]
             cnt = ni[row * _ROW + np.uint64(56) + a]
             go = True
             continue
-        if m == 2:                               # the nearer is next, the other waits (on a tie, the lower slot first)
+        b = np.uint64(_lowest(rest))
+        rest &= rest - np.uint32(1)
+        if rest == 0:                            # the nearer is next, the other waits (on a tie, the lower slot first)
             near, far = (b, a) if dist[b] < dist[a] else (a, b)
             far_t = dist[far]
             stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(48) + far]
@@ -388,10 +414,12 @@ def _closest_one(ox, oy, oz, dx, dy, dz, nf, ni, order, ltri, use_bvh, nsph, sph
             go = True
             continue
         m = 0                                    # more: the entered ones, in slot order, to dist[8:16] and [16:24],
-        for c in range(8):                       # then an insertion sort by distance (stable: slots ascend on ties)
-            dist[np.uint64(8 + m)] = dist[np.uint64(c)]
+        while mask != 0:                         # then an insertion sort by distance (stable: slots ascend on ties)
+            c = np.uint64(_lowest(mask))
+            mask &= mask - np.uint32(1)
+            dist[np.uint64(8 + m)] = dist[c]
             dist[np.uint64(16 + m)] = c
-            m += dist[np.uint64(c)] < math.inf
+            m += 1
         for i in range(9, 8 + m):
             dv, cv = dist[i], dist[i + 8]
             j = i - 1
@@ -521,12 +549,12 @@ def _transmit_one(ox, oy, oz, dx, dy, dz, tmax, nf, ni, order, ltri, use_bvh, ns
             cnt = scnt[np.uint64(sp)]
             if cnt < 0:                    # a row: its children wait on the stack, the last slot on top
                 row = np.uint64(q)
-                _slabs8(nf, row, ox32, oy32, oz32, ix32, iy32, iz32, t32, s32, dist)
+                mask = _slabs8(nf, row, ox32, oy32, oz32, ix32, iy32, iz32, t32, s32, dist)
                 nodes += _slots(ni, row)
                 for c in range(8):
                     stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(48 + c)]
                     scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(56 + c)]
-                    sp += dist[c] < math.inf
+                    sp += (mask >> np.uint32(c)) & np.uint32(1)
                 continue
             first, last = q, q + cnt
         j = first
