@@ -112,8 +112,12 @@ def _pair(impl: ModuleType, then_mods: tuple[ModuleType, ModuleType], ts) -> tup
     ref = reference_parts(impl)
     then_kernels, then_hierarchy = then_mods
     p = ref.hierarchy.packed(ts)
-    tree = then_tree = p["tree"]
-    if ts.bvh is not None:
+    tree = p["tree"]
+    if hasattr(then_hierarchy, "_layout"):   # that revision's own layout, with or without a hierarchy
+        then_tree = then_hierarchy._layout(ts, p["tri"])["tree"]
+    elif ts.bvh is None:
+        then_tree = tree
+    else:
         nf, ni, order, ltri, use = _layout_function(then_hierarchy)(ts.bvh, ts.n_spheres, p["tri"])
         then_tree = (nf.reshape(-1), ni.reshape(-1), order, ltri, use)
     return _Kernels(then_kernels, ts, then_tree, impl), _Kernels(ref.kernels, ts, tree, impl)
