@@ -38,12 +38,38 @@ def scratch(max_depth: int = 0) -> tuple[np.ndarray, ...]:
             np.empty((2 * max_depth + 2, 10)))
 
 
+def _lanes(builder, values, element):
+    """The eight scalars as one LLVM vector (insertelement; SLP and instcombine keep vectors as they are)."""
+    vector = ir.Constant(ir.VectorType(element, 8), ir.Undefined)
+    for i, v in enumerate(values):
+        vector = builder.insert_element(vector, v, ir.Constant(ir.IntType(32), i))
+    return vector
+
+
 @intrinsic
-def _popcount(typingctx, x):
-    """The number of set bits of an integer (LLVM's ctpop: one popcnt instruction)."""
-    if not isinstance(x, types.Integer):
+def _le_bits8(typingctx, n0, n1, n2, n3, n4, n5, n6, n7, f0, f1, f2, f3, f4, f5, f6, f7):
+    """Bit c set where n_c <= f_c (float32, ordered: false on NaN), for c = 0..7: one vector compare and a
+    mask move, where numba's own code takes the eight results apart bit by bit."""
+    if not all(a == types.float32 for a in (n0, n1, n2, n3, n4, n5, n6, n7, f0, f1, f2, f3, f4, f5, f6, f7)):
         return None
-    return x(x), lambda context, builder, sig, args: builder.ctpop(args[0])
+
+    def codegen(context, builder, sig, args):
+        le = builder.fcmp_ordered("<=", _lanes(builder, args[:8], ir.FloatType()), _lanes(builder, args[8:], ir.FloatType()))
+        return builder.zext(builder.bitcast(le, ir.IntType(8)), ir.IntType(32))
+    return types.uint32(*([types.float32] * 16)), codegen
+
+
+@intrinsic
+def _count_ne8(typingctx, x0, x1, x2, x3, x4, x5, x6, x7, v):
+    """How many of the eight int32 x_c differ from v: one vector compare, a mask move and popcnt."""
+    if not all(a == types.int32 for a in (x0, x1, x2, x3, x4, x5, x6, x7, v)):
+        return None
+
+    def codegen(context, builder, sig, args):
+        splat = _lanes(builder, [args[8]] * 8, ir.IntType(32))
+        ne = builder.icmp_unsigned("!=", _lanes(builder, args[:8], ir.IntType(32)), splat)
+        return builder.zext(builder.ctpop(builder.bitcast(ne, ir.IntType(8))), ir.IntType(32))
+    return types.uint32(*([types.int32] * 9)), codegen
 
 
 @intrinsic
@@ -241,13 +267,12 @@ def _axis(nf, q, col, o, inv, t0, t1):
 
 @njit(**_INLINE)
 def _widen(n, f, s):
-    """A child's entry distance (float32, inf where it is not entered) and 1 where it is: (n, f) widened by
+    """A child's entry distance (float32, inf where it is not entered) and the widened (n, f): (n, f) widened by
     the float32 test's error bound first, |t|·2^-21 + s on each side, so that the test can only let in more
     than exact arithmetic would."""
     nc = n - (abs(n) * _SLACK32 + s)
     fc = f + (abs(f) * _SLACK32 + s)
-    entered = nc <= fc
-    return (nc if entered else _INF32), np.uint32(entered)
+    return (nc if nc <= fc else _INF32), nc, fc
 
 
 @njit(**_INLINE)
@@ -283,30 +308,23 @@ def _slabs8(nf, q, ox, oy, oz, ix, iy, iz, tmax, s, dist):
     n5, f5 = _axis(nf, q, 21, oz, iz, n5, f5)
     n6, f6 = _axis(nf, q, 22, oz, iz, n6, f6)
     n7, f7 = _axis(nf, q, 23, oz, iz, n7, f7)
-    dist[0], e0 = _widen(n0, f0, s)
-    dist[1], e1 = _widen(n1, f1, s)
-    dist[2], e2 = _widen(n2, f2, s)
-    dist[3], e3 = _widen(n3, f3, s)
-    dist[4], e4 = _widen(n4, f4, s)
-    dist[5], e5 = _widen(n5, f5, s)
-    dist[6], e6 = _widen(n6, f6, s)
-    dist[7], e7 = _widen(n7, f7, s)
-    return (e0 | (e1 << np.uint32(1)) | (e2 << np.uint32(2)) | (e3 << np.uint32(3)) | (e4 << np.uint32(4))
-            | (e5 << np.uint32(5)) | (e6 << np.uint32(6)) | (e7 << np.uint32(7)))
+    dist[0], n0, f0 = _widen(n0, f0, s)
+    dist[1], n1, f1 = _widen(n1, f1, s)
+    dist[2], n2, f2 = _widen(n2, f2, s)
+    dist[3], n3, f3 = _widen(n3, f3, s)
+    dist[4], n4, f4 = _widen(n4, f4, s)
+    dist[5], n5, f5 = _widen(n5, f5, s)
+    dist[6], n6, f6 = _widen(n6, f6, s)
+    dist[7], n7, f7 = _widen(n7, f7, s)
+    return _le_bits8(n0, n1, n2, n3, n4, n5, n6, n7, f0, f1, f2, f3, f4, f5, f6, f7)
 
 
 @njit(**_INLINE)
 def _slots(ni, row):
-    """How many of row's eight slots hold a child (for the count of boxes tested): the eight comparisons
-    as bits, counted by one popcnt."""
+    """How many of row's eight slots hold a child (for the count of boxes tested; -2 marks an empty one)."""
     k = row * _ROW + np.uint64(56)
-    return _popcount(np.uint32(ni[k] != -2) | (np.uint32(ni[k + np.uint64(1)] != -2) << np.uint32(1))
-                     | (np.uint32(ni[k + np.uint64(2)] != -2) << np.uint32(2))
-                     | (np.uint32(ni[k + np.uint64(3)] != -2) << np.uint32(3))
-                     | (np.uint32(ni[k + np.uint64(4)] != -2) << np.uint32(4))
-                     | (np.uint32(ni[k + np.uint64(5)] != -2) << np.uint32(5))
-                     | (np.uint32(ni[k + np.uint64(6)] != -2) << np.uint32(6))
-                     | (np.uint32(ni[k + np.uint64(7)] != -2) << np.uint32(7)))
+    return _count_ne8(ni[k], ni[k + np.uint64(1)], ni[k + np.uint64(2)], ni[k + np.uint64(3)], ni[k + np.uint64(4)],
+                      ni[k + np.uint64(5)], ni[k + np.uint64(6)], ni[k + np.uint64(7)], np.int32(-2))
 
 
 @njit(**_INLINE)
