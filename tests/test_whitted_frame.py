@@ -248,3 +248,28 @@ def test12_the_bench_times_the_demo_to_a_finished_picture(ref):
     assert not demo.busy() and seconds > 0
     assert shown >= len(progressive_order(40, 30)[1]), "each pass ends a step, and a frame is drawn after each"
     assert demo.render.scene.counters["camera"] == 40 * 30
+
+
+def test13_the_kernels_bit_tricks_are_numpys_comparisons(ref):
+    """The vector compares the traversal reads a row through (which children a ray enters, how many slots are
+    full, the lowest entered one) against numpy's, NaN and infinities included."""
+    from numba import njit
+    K = part(ref, "kernels")
+
+    @njit
+    def tricks(n, f, x, v):
+        entered = K._le_bits8(n[0], n[1], n[2], n[3], n[4], n[5], n[6], n[7], f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7])
+        full = K._count_ne8(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], v)
+        return entered, full, (K._lowest(entered) if entered != 0 else 99)
+
+    rng = np.random.default_rng(3)
+    special = np.array([np.nan, np.inf, -np.inf, 0.0, -0.0, 1.0], np.float32)
+    for _ in range(300):
+        n = rng.choice(special, 8) if rng.random() < 0.3 else rng.normal(size=8).astype(np.float32)
+        f = np.where(rng.random(8) < 0.3, n, rng.normal(size=8)).astype(np.float32)   # ties, on purpose
+        x = rng.choice(np.array([-2, -1, 0, 5], np.int32), 8)
+        entered, full, lowest = tricks(n, f, x, np.int32(-2))
+        bits = n <= f
+        assert entered == int(np.sum(bits.astype(np.int64) << np.arange(8)))
+        assert full == int(np.sum(x != -2))
+        assert lowest == (int(np.argmax(bits)) if bits.any() else 99)
