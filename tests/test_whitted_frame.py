@@ -273,3 +273,22 @@ def test13_the_kernels_bit_tricks_are_numpys_comparisons(ref):
         assert entered == int(np.sum(bits.astype(np.int64) << np.arange(8)))
         assert full == int(np.sum(x != -2))
         assert lowest == (int(np.argmax(bits)) if bits.any() else 99)
+
+
+def test14_prefetching_a_waiting_child_changes_nothing(ref):
+    """The traversal asks for a waiting child's row or triangles early (``_fetch_child``); the hint compiles for
+    the flat rows and the 2-D triangles, past their ends too (a prefetch cannot fault), and writes nothing."""
+    from numba import njit
+    K = part(ref, "kernels")
+
+    @njit
+    def fetch(nf, ltri, q, cnt):
+        K._fetch_child(nf, ltri, q, cnt)
+        return nf.sum(), ltri.sum()
+
+    nf = np.arange(128, dtype=np.float32)
+    ltri = np.arange(36, dtype=np.float64).reshape(4, 9)
+    before = (nf.sum(), ltri.sum())
+    for q, cnt in ((0, -1), (1, -1), (0, 4), (3, 1), (10**6, -1), (10**6, 2)):
+        assert fetch(nf, ltri, q, cnt) == before
+    assert np.array_equal(nf, np.arange(128, dtype=np.float32))

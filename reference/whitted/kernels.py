@@ -81,6 +81,40 @@ def _lowest(typingctx, x):
     return x(x), lambda context, builder, sig, args: builder.cttz(args[0], ir.Constant(ir.IntType(1), 1))
 
 
+@intrinsic
+def _prefetch(typingctx, array, index):
+    """Ask for the cache line holding the element ``index`` places from a C-contiguous array's start (LLVM's
+    prefetch: one prefetcht0), without waiting for it; nothing checks the index (a prefetch cannot fault)."""
+    if not (isinstance(array, types.Array) and isinstance(index, types.Integer)):
+        return None
+
+    def codegen(context, builder, sig, args):
+        from numba.core import cgutils
+        data = context.make_array(sig.args[0])(context, builder, args[0]).data
+        address = builder.bitcast(builder.gep(data, [args[1]]), ir.PointerType(ir.IntType(8)))
+        i32 = ir.IntType(32)
+        fn = cgutils.get_or_insert_function(builder.module, ir.FunctionType(ir.VoidType(), [address.type, i32, i32, i32]),
+                                            "llvm.prefetch.p0")
+        builder.call(fn, [address, ir.Constant(i32, 0), ir.Constant(i32, 3), ir.Constant(i32, 1)])
+        return context.get_dummy_value()
+    return types.none(array, index), codegen
+
+
+@njit(**_INLINE)
+def _fetch_child(nf, ltri, q, cnt):
+    """Start loading a child that waits on the stack: a row's four cache lines, or a leaf's first triangles."""
+    if cnt < 0:
+        k = np.uint64(q) * _ROW
+        _prefetch(nf, k)
+        _prefetch(nf, k + np.uint64(16))
+        _prefetch(nf, k + np.uint64(32))
+        _prefetch(nf, k + np.uint64(48))
+    else:
+        k = np.uint64(q) * np.uint64(9)
+        _prefetch(ltri, k)
+        _prefetch(ltri, k + np.uint64(8))
+
+
 @njit(**_INLINE)
 def _sphere_roots(ox, oy, oz, dx, dy, dz, sph, s):
     """Both roots of the ray o + t d on sphere s (sph[s] = centre, radius), sorted, or (inf, inf)."""
@@ -347,7 +381,8 @@ def _closest_one(ox, oy, oz, dx, dy, dz, nf, ni, order, ltri, use_bvh, nsph, sph
     the root alone; ``ltri`` holds the triangles slot by slot (ltri[j] is triangle order[j] - nsph). The
     boxes are tested in float32, widened so that none the ray enters is missed (``_widen``); the hit itself
     is found in float64. The stack keeps each waiting child's row (or first slot), kind and entry distance.
-    A row whose ray enters one or two children takes the nearer next without sorting; more are sorted.
+    A row whose ray enters one or two children takes the nearer next without sorting; more are sorted. A child
+    put on the stack is fetched into the cache meanwhile (``_fetch_child``: random rays 1.04x, primary the same).
     """
     ix, iy, iz, kx, ky, kz, sx, sy, sz, okx, oky, okz = _setup(ox, oy, oz, dx, dy, dz, use_bvh, tri.shape[0] > 0)
     nb = nsph + tri.shape[0]
@@ -426,6 +461,7 @@ def _closest_one(ox, oy, oz, dx, dy, dz, nf, ni, order, ltri, use_bvh, nsph, sph
             far_t = dist[far]
             stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(48) + far]
             scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(56) + far]
+            _fetch_child(nf, ltri, stack[np.uint64(sp)], scnt[np.uint64(sp)])
             snear[np.uint64(sp)] = far_t
             sp += 1
             q = ni[row * _ROW + np.uint64(48) + near]
@@ -452,6 +488,7 @@ def _closest_one(ox, oy, oz, dx, dy, dz, nf, ni, order, ltri, use_bvh, nsph, sph
             c = np.uint64(dist[i + 8])
             stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(48) + c]
             scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(56) + c]
+            _fetch_child(nf, ltri, stack[np.uint64(sp)], scnt[np.uint64(sp)])
             snear[np.uint64(sp)] = dist[i]
             sp += 1
         c = np.uint64(dist[16])                  # the nearest is next
