@@ -195,7 +195,9 @@ def _shear(ox, oy, oz, dx, dy, dz):
 @njit(**_INLINE)
 def _setup(ox, oy, oz, dx, dy, dz, boxes, triangles):
     """What traversal needs of a ray, computed only where it is used: the inverse direction (for boxes) and
-    the watertight test's shear (for triangles).
+    the watertight test's shear (for triangles). With a hierarchy the closest-hit traversal takes the shear
+    at its first leaf instead: most rays that miss reach none (three divisions saved; primary rays 1.04x,
+    the shadow rays' traversal no faster, so it keeps it here).
 
     Along an axis the ray is parallel to, the inverse is +inf whatever the zero's sign: then a ray lying in a
     box's face gets NaN for that face's distance and ±inf for the other, in the order the slab tests pass
@@ -384,7 +386,9 @@ def _closest_one(ox, oy, oz, dx, dy, dz, nf, ni, order, ltri, use_bvh, nsph, sph
     A row whose ray enters one or two children takes the nearer next without sorting; more are sorted. A child
     put on the stack is fetched into the cache meanwhile (``_fetch_child``: random rays 1.04x, primary the same).
     """
-    ix, iy, iz, kx, ky, kz, sx, sy, sz, okx, oky, okz = _setup(ox, oy, oz, dx, dy, dz, use_bvh, tri.shape[0] > 0)
+    ix, iy, iz, kx, ky, kz, sx, sy, sz, okx, oky, okz = _setup(ox, oy, oz, dx, dy, dz, use_bvh,
+                                                               tri.shape[0] > 0 and not use_bvh)
+    unsheared = use_bvh and tri.shape[0] > 0   # then the shear waits for the first leaf (``_setup``)
     nb = nsph + tri.shape[0]
     best = math.inf
     prim = -1
@@ -433,6 +437,9 @@ def _closest_one(ox, oy, oz, dx, dy, dz, nf, ni, order, ltri, use_bvh, nsph, sph
             cnt = scnt[np.uint64(sp)]
         go = False
         if cnt >= 0:  # a leaf
+            if unsheared:
+                kx, ky, kz, sx, sy, sz, okx, oky, okz = _shear(ox, oy, oz, dx, dy, dz)
+                unsheared = False
             for j in range(q, q + cnt):
                 k = order[j]
                 tests += 1
