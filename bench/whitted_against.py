@@ -127,7 +127,7 @@ def compare(rev: str, repeats: int = 15) -> list[dict]:
     """One row per query (see the module's docstring), on the torus's rays and the three scenes' frames."""
     impl = load_impl(resolve_impl("reference", "whitted"), "whitted")
     rows: list[dict] = []
-    bar = Progress(f"Whitted kernels against {rev}", 11)
+    bar = Progress(f"Whitted kernels against {rev}", 15)
     with tempfile.TemporaryDirectory() as tmp:
         mods = (_module_at(rev, "reference/whitted/kernels.py", "kernels_then", Path(tmp)),
                 _module_at(rev, "reference/whitted/hierarchy.py", "hierarchy_then", Path(tmp)))
@@ -151,11 +151,10 @@ def compare(rev: str, repeats: int = 15) -> list[dict]:
             ts = stage.prepare(sc, impl)
             then, now = _pair(impl, mods, ts)
             o, d = (np.ascontiguousarray(a) for a in impl.camera_rays(sc.camera, 320, 240))
-            queries = [(f"whole frame, {name} 320×240", then.frame, now.frame, (o, d))]
-            if ts.bvh is not None:   # the frame's own queries, each through its kernel
-                own = frame_rays(reference_parts(impl), ts, o, d)
-                queries += [("  its closest-hit queries", then.closest, now.closest, own["closest"]),
-                            ("  its shadow rays", then.shadow, now.shadow, own["shadow"])]
+            own = frame_rays(reference_parts(impl), ts, o, d)   # the frame's own queries, each through its kernel
+            queries = [(f"whole frame, {name} 320×240", then.frame, now.frame, (o, d)),
+                       ("  its closest-hit queries", then.closest, now.closest, own["closest"]),
+                       ("  its shadow rays", then.shadow, now.shadow, own["shadow"])]
             for label, fa, fb, args in queries:
                 rows.append(_measured(label, fa, fb, args, repeats))
                 bar.advance(note=label.strip())

@@ -568,17 +568,47 @@ def _attenuate(T0, T1, T2, k, t, ox, oy, oz, dx, dy, dz, nb, prim_mat, trans, pl
 
 
 @njit(**_INLINE)
+def _cross(T0, T1, T2, k, j, ox, oy, oz, dx, dy, dz, shear, tmax, nsph, sph, tris, nb, prim_mat, trans, planes,
+           pframe, checker, checker_mat):
+    """A shadow ray against primitive k (row j of ``tris``): (T0, T1, T2) times the transmittance of each
+    crossing on (0, tmax), nearer first for a sphere, and whether the light is now blocked. ``shear``: the
+    watertight test's axes, shear and permuted origin (``_shear``), in one tuple (numba inlines calls of at
+    most 30 arguments)."""
+    if k < nsph:
+        t0, t1 = _sphere_roots(ox, oy, oz, dx, dy, dz, sph, k)
+        if 0.0 < t0 < tmax:
+            T0, T1, T2, blocked = _attenuate(T0, T1, T2, k, t0, ox, oy, oz, dx, dy, dz, nb, prim_mat, trans,
+                                             planes, pframe, checker, checker_mat)
+            if blocked:
+                return 0.0, 0.0, 0.0, True
+        if 0.0 < t1 < tmax:
+            return _attenuate(T0, T1, T2, k, t1, ox, oy, oz, dx, dy, dz, nb, prim_mat, trans, planes, pframe,
+                              checker, checker_mat)
+        return T0, T1, T2, False
+    kx, ky, kz, sx, sy, sz, okx, oky, okz = shear
+    t = _triangle(okx, oky, okz, kx, ky, kz, sx, sy, sz, tris, j, tmax)
+    if t < tmax:
+        return _attenuate(T0, T1, T2, k, t, ox, oy, oz, dx, dy, dz, nb, prim_mat, trans, planes, pframe, checker,
+                          checker_mat)
+    return T0, T1, T2, False
+
+
+@njit(**_INLINE)
 def _transmit_one(ox, oy, oz, dx, dy, dz, tmax, nf, ni, order, ltri, use_bvh, nsph, sph, tri, planes, pframe,
                   checker, checker_mat, prim_mat, trans, stack, scnt, dist):
     """One shadow ray: the product (T0, T1, T2) of the transmittances crossed on (0, tmax), zero once an
-    opaque surface is crossed (any hit: the search stops there), and (nodes, tests)."""
+    opaque surface is crossed (any hit: the search stops there), and (nodes, tests).
+
+    Without a hierarchy the primitives are taken in one plain loop, as ``_closest_one`` does: through the
+    traversal's loop (a node at a time, none on the stack) a shadow ray cost twice as much on the whitted scene.
+    """
     ix, iy, iz, kx, ky, kz, sx, sy, sz, okx, oky, okz = _setup(ox, oy, oz, dx, dy, dz, use_bvh, tri.shape[0] > 0)
+    shear = (kx, ky, kz, sx, sy, sz, okx, oky, okz)
     nb = nsph + tri.shape[0]
     T0, T1, T2 = 1.0, 1.0, 1.0
     nodes = 0
     tests = 0
     blocked = False
-    ox32 = oy32 = oz32 = ix32 = iy32 = iz32 = s32 = t32 = _F0
     for p in range(planes.shape[0]):
         tests += 1
         dn = dx * planes[p, 3] + dy * planes[p, 4] + dz * planes[p, 5]
@@ -590,62 +620,41 @@ def _transmit_one(ox, oy, oz, dx, dy, dz, tmax, nf, ni, order, ltri, use_bvh, ns
                                                  planes, pframe, checker, checker_mat)
                 if blocked:
                     return 0.0, 0.0, 0.0, nodes, tests
-    sp = 0
-    if use_bvh:
-        nodes += 1
-        if _root(nf, ox, oy, oz, ix, iy, iz, tmax) == math.inf:   # row 0 holds the root alone
-            return T0, T1, T2, nodes, tests
-        ox32, oy32, oz32, ix32, iy32, iz32, s32 = _ray32(ox, oy, oz, ix, iy, iz)  # only for rays that enter it
-        t32 = _up32(tmax)
-        stack[0] = ni[48]
-        scnt[0] = ni[56]
-        sp = 1
-        first, last = 0, 0
-    else:
-        first, last = 0, nb     # no hierarchy: one pass over every primitive
-    while True:
-        if first == last:       # the primitives in hand are done: open the next node
-            if sp == 0:
-                break
-            sp -= 1
-            q = stack[np.uint64(sp)]
-            cnt = scnt[np.uint64(sp)]
-            if cnt < 0:                    # a row: its children wait on the stack, the last slot on top
-                row = np.uint64(q)
-                mask = _slabs8(nf, row, ox32, oy32, oz32, ix32, iy32, iz32, t32, s32, dist)
-                nodes += _slots(ni, row)
-                for c in range(8):
-                    stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(48 + c)]
-                    scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(56 + c)]
-                    sp += (mask >> np.uint32(c)) & np.uint32(1)
-                continue
-            first, last = q, q + cnt
-        j = first
-        first += 1
-        k = order[j] if use_bvh else j
-        tests += 1
-        if k < nsph:
-            t0, t1 = _sphere_roots(ox, oy, oz, dx, dy, dz, sph, k)
-            if 0.0 < t0 < tmax:
-                T0, T1, T2, blocked = _attenuate(T0, T1, T2, k, t0, ox, oy, oz, dx, dy, dz, nb, prim_mat, trans,
-                                                 planes, pframe, checker, checker_mat)
-                if blocked:
-                    return 0.0, 0.0, 0.0, nodes, tests
-            if 0.0 < t1 < tmax:
-                T0, T1, T2, blocked = _attenuate(T0, T1, T2, k, t1, ox, oy, oz, dx, dy, dz, nb, prim_mat, trans,
-                                                 planes, pframe, checker, checker_mat)
-                if blocked:
-                    return 0.0, 0.0, 0.0, nodes, tests
-        else:
-            if use_bvh:
-                t = _triangle(okx, oky, okz, kx, ky, kz, sx, sy, sz, ltri, j, tmax)
-            else:
-                t = _triangle(okx, oky, okz, kx, ky, kz, sx, sy, sz, tri, k - nsph, tmax)
-            if t < tmax:
-                T0, T1, T2, blocked = _attenuate(T0, T1, T2, k, t, ox, oy, oz, dx, dy, dz, nb, prim_mat, trans,
-                                                 planes, pframe, checker, checker_mat)
-                if blocked:
-                    return 0.0, 0.0, 0.0, nodes, tests
+    if not use_bvh:             # every primitive in turn
+        for k in range(nb):
+            tests += 1
+            T0, T1, T2, blocked = _cross(T0, T1, T2, k, k - nsph, ox, oy, oz, dx, dy, dz, shear, tmax, nsph, sph, tri,
+                                         nb, prim_mat, trans, planes, pframe, checker, checker_mat)
+            if blocked:
+                return 0.0, 0.0, 0.0, nodes, tests
+        return T0, T1, T2, nodes, tests
+    nodes += 1
+    if _root(nf, ox, oy, oz, ix, iy, iz, tmax) == math.inf:   # row 0 holds the root alone
+        return T0, T1, T2, nodes, tests
+    ox32, oy32, oz32, ix32, iy32, iz32, s32 = _ray32(ox, oy, oz, ix, iy, iz)  # only for rays that enter it
+    t32 = _up32(tmax)
+    stack[0] = ni[48]
+    scnt[0] = ni[56]
+    sp = 1
+    while sp > 0:
+        sp -= 1
+        q = stack[np.uint64(sp)]
+        cnt = scnt[np.uint64(sp)]
+        if cnt < 0:                    # a row: its children wait on the stack, the last slot on top
+            row = np.uint64(q)
+            mask = _slabs8(nf, row, ox32, oy32, oz32, ix32, iy32, iz32, t32, s32, dist)
+            nodes += _slots(ni, row)
+            for c in range(8):
+                stack[np.uint64(sp)] = ni[row * _ROW + np.uint64(48 + c)]
+                scnt[np.uint64(sp)] = ni[row * _ROW + np.uint64(56 + c)]
+                sp += (mask >> np.uint32(c)) & np.uint32(1)
+            continue
+        for j in range(q, q + cnt):    # a leaf
+            tests += 1
+            T0, T1, T2, blocked = _cross(T0, T1, T2, order[j], j, ox, oy, oz, dx, dy, dz, shear, tmax, nsph, sph,
+                                         ltri, nb, prim_mat, trans, planes, pframe, checker, checker_mat)
+            if blocked:
+                return 0.0, 0.0, 0.0, nodes, tests
     return T0, T1, T2, nodes, tests
 
 
