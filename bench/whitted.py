@@ -292,6 +292,9 @@ def summary(speed: dict, frame_rows: list[dict], demo_rows: list[dict]) -> list[
         lines.append(f"| the same frames against the kernels on the frame's own rays (closest hit and shadow), {on} | "
                      f"{each(f'frame_{t}t_Mrays')} | kernels {each(f'own_rays_{t}t_Mrays')} | "
                      f"{each(f'frame_over_own_rays_{t}t')} |")
+        lines.append(f"| the frame's own rays through the kernels alone, against the closest-hit kernel on its camera rays "
+                     f"(the frame's ratio if shading cost nothing), {on} | kernels {each(f'own_rays_{t}t_Mrays')} | "
+                     f"kernel {each(f'kernel_{t}t_Mrays')} | {each(f'own_rays_over_kernel_{t}t')} |")
         lines.append(f"| the same frames with camera rays only (no lights, no recursion), {on} (s); its share spent on "
                      f"the lights | {each(f'camera_only_{t}t_s', '.4f')}; lights {each(f'lights_share_{t}t', '.0%')} | "
                      f"kernel on the same rays | {each(f'camera_only_over_kernel_{t}t')} |")

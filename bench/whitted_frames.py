@@ -114,6 +114,8 @@ def frames(impl: ModuleType, quick: bool, spp: int = 1) -> list[dict]:
             row[f"own_rays_{n}t_Mrays"] = rays / best[f"own_rays_{n}t_s"] / 1e6
             row[f"frame_over_kernel_{n}t"] = row[f"frame_{n}t_Mrays"] / row[f"kernel_{n}t_Mrays"]
             row[f"frame_over_own_rays_{n}t"] = row[f"frame_{n}t_Mrays"] / row[f"own_rays_{n}t_Mrays"]
+            # the frame's ratio to the camera-ray kernel if its shading and bookkeeping cost nothing
+            row[f"own_rays_over_kernel_{n}t"] = row[f"own_rays_{n}t_Mrays"] / row[f"kernel_{n}t_Mrays"]
             row[f"camera_only_over_kernel_{n}t"] = best[f"kernel_{n}t_s"] / best[f"camera_only_{n}t_s"]
             row[f"lights_share_{n}t"] = 1 - best[f"no_lights_{n}t_s"] / best[f"frame_{n}t_s"]
             if "mitsuba_1t_s" in best:
