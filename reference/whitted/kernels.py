@@ -600,7 +600,7 @@ def _transmit_one(ox, oy, oz, dx, dy, dz, tmax, nf, ni, order, ltri, use_bvh, ns
     opaque surface is crossed (any hit: the search stops there), and (nodes, tests).
 
     Without a hierarchy the primitives are taken in one plain loop, as ``_closest_one`` does: through the
-    traversal's loop (a node at a time, none on the stack) a shadow ray cost twice as much on the whitted scene.
+    traversal's loop (a node at a time, none on the stack) the whitted scene's shadow rays took 1.2-1.5x as long.
     """
     ix, iy, iz, kx, ky, kz, sx, sy, sz, okx, oky, okz = _setup(ox, oy, oz, dx, dy, dz, use_bvh, tri.shape[0] > 0)
     shear = (kx, ky, kz, sx, sy, sz, okx, oky, okz)
