@@ -14,7 +14,7 @@ text chunks: :func:`figure_facts` reads them back.
 
 Ray tracing figures run the reference's plain numpy path (``_numpy_path``): it gives the same colours as
 the compiled kernels (tests/test_whitted_frame.py), takes well under a second at slide sizes, and never
-waits for numba's first compile (90 s on two cores). Not thread-safe: build figures in one thread, or in
+waits for numba's first compile (~2 minutes on two cores). Not thread-safe: build figures in one thread, or in
 processes.
 """
 from __future__ import annotations
