@@ -365,12 +365,13 @@ def _slots(ni, row):
 
 
 @njit(**_INLINE)
-def _prim_t(ox, oy, oz, dx, dy, dz, okx, oky, okz, kx, ky, kz, sx, sy, sz, k, j, nsph, sph, ltri, tmax):
-    """Distance to primitive k (slot j of the leaf-ordered triangles): a sphere's first root ahead, or inf."""
+def _prim_t(ox, oy, oz, dx, dy, dz, okx, oky, okz, kx, ky, kz, sx, sy, sz, k, j, nsph, sph, tris, tmax):
+    """Distance to primitive k (row j of ``tris``: the leaf-ordered triangles, or the scene's own without a
+    hierarchy): a sphere's first root ahead, or inf."""
     if k < nsph:
         t0, t1 = _sphere_roots(ox, oy, oz, dx, dy, dz, sph, k)
         return t0 if t0 > 0.0 else t1
-    return _triangle(okx, oky, okz, kx, ky, kz, sx, sy, sz, ltri, j, tmax)
+    return _triangle(okx, oky, okz, kx, ky, kz, sx, sy, sz, tris, j, tmax)
 
 
 @njit(**_INLINE)
@@ -406,11 +407,7 @@ def _closest_one(ox, oy, oz, dx, dy, dz, nf, ni, order, ltri, use_bvh, nsph, sph
     if not use_bvh:
         for k in range(nb):
             tests += 1
-            if k < nsph:
-                t0, t1 = _sphere_roots(ox, oy, oz, dx, dy, dz, sph, k)
-                t = t0 if t0 > 0.0 else t1
-            else:
-                t = _triangle(okx, oky, okz, kx, ky, kz, sx, sy, sz, tri, k - nsph, best)
+            t = _prim_t(ox, oy, oz, dx, dy, dz, okx, oky, okz, kx, ky, kz, sx, sy, sz, k, k - nsph, nsph, sph, tri, best)
             if 0.0 < t < best:
                 best = t
                 prim = k
