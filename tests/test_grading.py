@@ -139,3 +139,29 @@ def test10_shader_errors_name_the_shader_and_count_the_students_own_lines():
         SphereRenderer(ctx, ("#version 330\n" + vertex, fragment), [], "S6")
     with pytest.raises(KitError, match=r"^S6: the vertex and fragment shaders do not link"):
         SphereRenderer(ctx, (vertex, fragment.replace("void main()", "void mane()")), [], "S6")
+
+
+@pytest.mark.parametrize("zero_height_viewport, full", [("(0, 0, width, 0)", True), ("(0, 0, width, 2)", False),
+                                                        ("(0, 0, 0, 0)", False)])
+def test11_a_zero_height_window_may_keep_viewport_height_0_or_1(make_submission, reference_grade,
+                                                                zero_height_viewport, full):
+    """Handout §S7: for a window of height 0 the viewport may be (0, 0, w, 0), as the notes' program passes to
+    glViewport (legal GL), or (0, 0, w, 1); any other viewport loses S7's points for that window."""
+    root = make_submission("sphere", "camera.py", "    height = max(int(height), 1)\n",
+                           "    minimised = int(height) == 0\n    height = max(int(height), 1)\n")
+    camera = root / "sphere" / "camera.py"
+    text = camera.read_text()
+    old = "return (0, 0, width, height), perspective("
+    assert old in text
+    camera.write_text(text.replace(old, f"return ({zero_height_viewport} if minimised else (0, 0, width, height)), "
+                                        "perspective(", 1))
+    result = grade("sphere", root, show_progress=False, tasks=["S7"])
+    got, want = points_by_task(result)["S7"], points_by_task(reference_grade)["S7"]
+    assert want == 10
+    if full:
+        assert got == want, [(r.test.number, r.verdict.message) for r in result.results if r.score < r.test.points]
+    else:
+        lost = [r for r in result.results if r.score < r.test.points]
+        assert got < want and lost and all(r.test.params["height"] == 0 for r in lost)
+        assert all("expected (0, 0, 500, 0) or (0, 0, 500, 1)" in r.verdict.message or
+                   "expected (0, 0, 640, 0) or (0, 0, 640, 1)" in r.verdict.message for r in lost)
