@@ -2,12 +2,15 @@
 from __future__ import annotations
 
 import json
+import os
+from pathlib import Path
 
 import pytest
 
 from cs451.grading.report import write_report
 from cs451.grading.results import format_table, to_gradescope, write_results
 from cs451.grading.loader import load_tests
+from cs451 import KIT_ROOT
 from cs451.grading.runner import grade
 
 
@@ -165,3 +168,34 @@ def test11_a_zero_height_window_may_keep_viewport_height_0_or_1(make_submission,
         assert got < want and lost and all(r.test.params["height"] == 0 for r in lost)
         assert all("expected (0, 0, 500, 0) or (0, 0, 500, 1)" in r.verdict.message or
                    "expected (0, 0, 640, 0) or (0, 0, 640, 1)" in r.verdict.message for r in lost)
+
+
+@pytest.mark.skipif(not hasattr(os, "geteuid") or os.geteuid() != 0, reason="as root the tests run as a throwaway user")
+def test12_as_root_a_python_behind_a_private_folder_is_named_with_the_fix():
+    """Root grading with its Python environment under a 0700 folder (a repository in /root, say): the sandbox's
+    throwaway user cannot reach the interpreter. The refusal names that folder and the fix, which then works; it
+    does not tell root to install the bubblewrap it has or to grade as root."""
+    import shutil
+    import subprocess
+    import sys
+
+    from conftest import world_readable_dir
+    top = world_readable_dir("cs451-private-")
+    private = top / "private"
+    private.mkdir(mode=0o700)
+    (private / "venv").symlink_to(Path(sys.prefix))   # the kit's environment, reached through the private folder
+    try:
+        shutil.copytree(KIT_ROOT / "reference" / "sphere", top / "upload" / "sphere",
+                        ignore=shutil.ignore_patterns("__pycache__"))
+        command = [str(private / "venv" / "bin" / "python"), "-m", "cs451", "grade", "sphere", "--submission",
+                   str(top / "upload"), "--tasks", "S1", "--public-only"]
+        done = subprocess.run(command, cwd=top, capture_output=True, text=True, timeout=300)
+        assert done.returncode == 2, done.stdout + done.stderr
+        said = done.stderr
+        assert f"cannot reach the Python interpreter {private}/venv/bin/python: {private} lets no other user" in said
+        assert f"chmod o+x {private}" in said and "grade as root" not in said and "Install bubblewrap" not in said
+        os.chmod(private, 0o711)     # the fix the message gives
+        done = subprocess.run(command, cwd=top, capture_output=True, text=True, timeout=300)
+        assert done.returncode == 0 and "total: 6 / 6" in done.stdout, done.stdout + done.stderr
+    finally:
+        shutil.rmtree(top, ignore_errors=True)

@@ -30,6 +30,7 @@ import os
 import random
 import shutil
 import signal
+import stat
 import subprocess
 import sys
 import tempfile
@@ -75,6 +76,24 @@ def _sandbox_litter(folder: str, names: list[str]) -> set[str]:
 
 class IsolationError(KitError):
     """The sandbox cannot be set up as required here: grading must not go on (the message says why)."""
+
+
+def private_folder_above(path: Path) -> Path | None:
+    """The first folder on the way to ``path`` (as written, and with its links resolved) that users who are neither
+    its owner nor in its group may not pass through (no ``o+x``), or None."""
+    seen: set[Path] = set()
+    for route in (Path(os.path.abspath(path)), Path(path).resolve()):
+        for folder in [*reversed(route.parents), route]:
+            if folder in seen:
+                continue
+            seen.add(folder)
+            try:
+                mode = os.stat(folder).st_mode
+            except OSError:
+                continue
+            if stat.S_ISDIR(mode) and not mode & stat.S_IXOTH:
+                return folder
+    return None
 
 
 def is_root() -> bool:
@@ -383,8 +402,41 @@ class Sandbox:
             if problem is None:
                 return mode
             reasons.append(f"{mode}: {problem}")
-        raise IsolationError("the submission cannot be isolated here, so it is not run (" + "; ".join(reasons) +
-                             "). Install bubblewrap (apt-get install bubblewrap) or grade as root.")
+        tried = " (" + "; ".join(reasons) + ")"
+        blocked = self._unreachable() if is_root() else None
+        if blocked is not None:
+            what, needed, private = blocked
+            raise IsolationError(
+                f"the submission cannot be isolated here, so it is not run: its tests run as a throwaway user, never "
+                f"as root, and that user cannot reach {what} {needed}: {private} lets no other user pass through "
+                f"(mode {stat.S_IMODE(os.stat(private).st_mode):04o}). Let others pass through it (chmod o+x "
+                f"{private}: they may then open what is inside by name, not list it), move the repository to a "
+                f"folder they may pass through and run its ./setup.sh again there, or grade as an ordinary user"
+                + tried)
+        fixes = [f for f, needed in (("install bubblewrap (apt-get install bubblewrap)", not shutil.which("bwrap")),
+                                     ("grade as root", not is_root())) if needed]
+        raise IsolationError("the submission cannot be isolated here, so it is not run" + tried +
+                             (". " + " or ".join(fixes)[:1].upper() + " or ".join(fixes)[1:] + "." if fixes else "."))
+
+    def _needed_outside(self) -> list[tuple[str, str]]:
+        """What the sandbox's user must reach by path before any namespace exists: (what it is, path)."""
+        needed = [("the Python interpreter", sys.executable)]
+        needed += [("the Python environment", prefix) for prefix in
+                   sorted({sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix})]
+        needed += [("the library folder", lib) for lib in os.environ.get("LD_LIBRARY_PATH", "").split(":")
+                   if lib and os.path.isdir(lib)]
+        if self.run_dir is not None:
+            needed.append(("the grading folder", str(self.run_dir)))
+        return needed
+
+    def _unreachable(self) -> tuple[str, str, Path] | None:
+        """The first needed path behind a folder that users other than its owner may not pass through (mode bits
+        only: the usual cause of a refusal as root, e.g. a repository in /root or under a private folder)."""
+        for what, path in self._needed_outside():
+            private = private_folder_above(Path(path))
+            if private is not None:
+                return what, path, private
+        return None
 
     def _usable(self, mode: str) -> str | None:
         if mode == "none":
