@@ -3,7 +3,10 @@
 The engine holds no solution. It reads scenes, opens headless GL contexts,
 writes and compares images, declares each stage's interface, and runs the CLI.
 """
+import importlib
+import sys
 from pathlib import Path
+from types import ModuleType
 
 __version__ = "0.1.0"
 
@@ -30,3 +33,25 @@ def _kit_root() -> Path:
 
 #: The kit this engine serves: a checkout, a student's release, or the kit an installed wheel carries.
 KIT_ROOT = _kit_root()
+
+
+def import_from_kit(module: str) -> ModuleType:
+    """Import ``module`` of one of the kit's own top-level packages (``autograder``, ``bench``) from KIT_ROOT.
+
+    Those packages sit beside the engine, not inside it, so they import only with KIT_ROOT on
+    ``sys.path``. ``python -m cs451`` run from the kit's folder has it there by chance (the working
+    directory comes first); the installed ``cs451`` console script does not, and neither does any
+    command run from another folder. Every import of a spec, a check, a truth or a benchmark goes
+    through here, so none depends on where the command was typed.
+    """
+    top = module.split(".")[0]
+    root = str(KIT_ROOT)
+    if root not in sys.path:
+        sys.path.insert(0, root)
+    loaded = sys.modules.get(top) or importlib.import_module(top)
+    found = [Path(p).resolve() for p in getattr(loaded, "__path__", [])]
+    if (KIT_ROOT / top).resolve() not in found:   # another folder's package of that name came first
+        from .errors import KitError
+        raise KitError(f"{top}: imported from {', '.join(map(str, found)) or '?'}, not from the kit at {KIT_ROOT}; "
+                       f"run the command from another folder")
+    return importlib.import_module(module)

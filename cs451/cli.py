@@ -17,7 +17,17 @@ from .errors import KitError
 
 def _cmd_render(a: argparse.Namespace) -> int:
     from .copy import default_impl
-    from .render import render_scene
+    from .render import render_figure, render_scene
+    if a.figure:
+        given = [o for o, v in (("a scene", a.scene), ("--size", a.size), ("--stage", a.stage),
+                                ("--shading", a.shading)) if v]
+        if given:
+            raise KitError(f"--figure {a.figure} draws the figure's own scene, size and settings: drop {', '.join(given)}")
+        path, seconds = render_figure(figure=a.figure, output=a.output, impl=a.impl or default_impl())
+        print(f"wrote {path} ({seconds:.2f} s; figure {a.figure}, drawn as its test draws it)")
+        return 0
+    if not a.scene:
+        raise KitError("render: give a scene (a bundled name or a scene file) or --figure TEST")
     path, seconds = render_scene(scene=a.scene, output=a.output, impl=a.impl or default_impl(), size=a.size,
                                  stage=a.stage, shading=a.shading)
     print(f"wrote {path} ({seconds:.2f} s)")
@@ -175,11 +185,10 @@ def _cmd_passed(a: argparse.Namespace) -> int:
 
 
 def _cmd_release(a: argparse.Namespace) -> int:
-    from .packaging.release import build_release
+    from .packaging.release import build_release, release_warnings
     included = tuple(a.include_reference or ())
-    if included:
-        print(f"warning: the release ships the reference solution of {', '.join(included)}: give it to students "
-              "only after that stage's deadline", file=sys.stderr)
+    for warning in release_warnings(a.stage, included):
+        print(f"warning: {warning}", file=sys.stderr)
     out = build_release(a.stage, a.output, include_reference=included)
     print(f"wrote the student repository for {a.stage} to {out} (push it as the GitHub Classroom template)")
     return 0
@@ -199,7 +208,9 @@ def build_parser() -> argparse.ArgumentParser:
     yours = "your package (this repository's)" if mine else "reference"
 
     r = sub.add_parser("render", help="render a scene to a PNG", description="Render a scene with an implementation of a stage.")
-    r.add_argument("scene", help="a bundled scene name (see `cs451 scenes`) or a path to a scene JSON file")
+    r.add_argument("scene", nargs="?", help="a bundled scene name (see `cs451 scenes`) or a path to a scene JSON file")
+    r.add_argument("--figure", metavar="TEST", help="instead of a scene, a handout figure: its image test (e.g. S5.1) "
+                                                    "drawn as the test draws it, to compare with the figure")
     r.add_argument("-o", "--output", required=True, help="PNG file to write")
     r.add_argument("--impl", help=f"{'.' if mine else 'reference, starter'}, or the path of a folder holding the "
                                   f"stage's package (default: {yours})")

@@ -54,3 +54,48 @@ def render_scene(*, scene: str, output: str | Path, impl: str = "reference", siz
     image = st.render(sc, module, parse_size(size), **kwargs)
     seconds = time.perf_counter() - start
     return save_png(output, image, sc.image.exposure, sc.image.srgb), seconds
+
+
+def figure_stage(figure: str) -> str:
+    """The stage whose task a figure's number names (``S5.3``: stage 1's S5)."""
+    from .copy import student_stage
+    mine = student_stage()
+    if mine:
+        return mine
+    task = figure.split(".")[0]
+    for name in stage_names():
+        if any(t.id == task for t in get_stage(name).tasks):
+            return name
+    raise KitError(f"--figure {figure}: no stage has a task {task!r}; a figure is named by its test, e.g. S5.1")
+
+
+def render_figure(*, figure: str, output: str | Path, impl: str = "reference") -> tuple[Path, float]:
+    """Draw a handout figure with an implementation, exactly as its image test draws it; returns the path and seconds.
+
+    A figure (``assignments/<handout>/figures/<test>.png``) is the reference's answer to a public image test:
+    that test's scene, size and settings (``patch_size``, ``resolution``, shading…), and the parts of earlier
+    tasks the test gives (the reference's own, so that a figure judges its task alone). They are in the
+    public tests (``autograder/<stage>/public.json`` in a student's copy), and this draws the same with
+    ``impl``, written as the figure is: ``cs451 compare`` then judges the two as the test does.
+    """
+    from .grading.checks import target_images
+    from .grading.expected import ReferenceAnswers
+    from .grading.loader import load_tests
+    from .imageio import check_output
+    from .packaging.figures import is_image_test
+    check_output(output)
+    st = get_stage(figure_stage(figure))
+    figures = [t for t in load_tests(st.name, include_hidden=False) if is_image_test(t)]
+    test = next((t for t in figures if t.number == figure), None)
+    if test is None:
+        raise KitError(f"--figure {figure}: not a figure of stage {st.name} (its figures: "
+                       f"{', '.join(t.number for t in figures) or 'none'})")
+    module = load_impl(resolve_impl(impl, st.name), st.name)
+    given = ReferenceAnswers(st.name).get(test.given, test.params) if test.given else {}
+    start = time.perf_counter()
+    outputs = st.probes[test.probe](module, **test.params, **given)
+    seconds = time.perf_counter() - start
+    image = target_images(outputs, test.params).get("reference")
+    if image is None:
+        raise KitError(f"--figure {figure}: {st.name}'s {test.task} drew no image (as the test would report)")
+    return save_png(output, image), seconds

@@ -39,6 +39,25 @@ def world_readable_dir(prefix: str) -> Path:
     return path
 
 
+def clean_env(home: Path, *bin_dirs: Path) -> dict[str, str]:
+    """What ``env -i HOME=<home> PATH=<bin_dirs>:/usr/bin:/bin`` leaves: nothing of this machine's environment (no
+    PIP_*, PYTHON*, DISPLAY, no kit venv on PATH), so a command sees what a user's fresh shell would."""
+    home.mkdir(parents=True, exist_ok=True)
+    return {"HOME": str(home), "PATH": ":".join([*(str(b) for b in bin_dirs), "/usr/bin", "/bin"])}
+
+
+def set_up_release(release: Path, home: Path) -> dict[str, str]:
+    """A student's repository set up as its README says (its own ``./setup.sh``, which makes ``.venv`` from this
+    machine's registries, in a clean environment); returns the environment of a student's shell after
+    ``source .venv/bin/activate``: the release's ``.venv/bin`` and the system's folders on PATH, nothing else."""
+    import subprocess
+    done = subprocess.run(["./setup.sh"], cwd=release, env=clean_env(home), capture_output=True, text=True,
+                          timeout=1800)
+    assert done.returncode == 0, f"setup.sh failed:\n{done.stdout[-2000:]}\n{done.stderr[-3000:]}"
+    assert (release / ".venv" / "bin" / "cs451").is_file(), "setup.sh made no .venv/bin/cs451"
+    return clean_env(home, release / ".venv" / "bin")
+
+
 @pytest.fixture(scope="session")
 def gradescope(request) -> tuple[Path, dict]:
     """Stage 1's autograder zip in Gradescope's layout, after its own setup.sh ran (the kit moved to opt/)."""

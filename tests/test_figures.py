@@ -62,3 +62,22 @@ def test_the_handout_diagrams_are_in_step_ship_and_a_changed_one_is_drift(tmp_pa
     monkeypatch.setattr(D, "KIT_ROOT", kit)
     assert D.check_diagrams("sphere") == [f"assignments/{handout.name}/diagrams/light-spaces.png: differs from the "
                                           f"reference's render"]
+
+
+def test_a_figure_drawn_with_render_figure_matches_it_and_the_starter_says_what_is_missing(tmp_path):
+    """The handout's recipe: `cs451 render --figure` draws the figure's own test (S5.3's lights and S6.2's coarse
+    sphere are in no bundled scene; R5.3's patch size and resolution are the test's), and compare judges it."""
+    import subprocess
+    import sys
+    for number, handout in (("S5.3", "01-sphere"), ("S6.2", "01-sphere"), ("R5.3", "04-radiosity")):
+        mine = tmp_path / f"{number}.png"
+        cs451 = [sys.executable, "-m", "cs451"]
+        done = subprocess.run(cs451 + ["render", "--figure", number, "-o", str(mine), "--impl", "reference"],
+                              capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, done.stderr
+        done = subprocess.run(cs451 + ["compare", str(mine), f"assignments/{handout}/figures/{number}.png", "-o",
+                                       str(tmp_path / "c.png")], cwd=KIT_ROOT, capture_output=True, text=True)
+        assert done.returncode == 0 and " matches " in done.stdout, done.stdout + done.stderr
+        done = subprocess.run(cs451 + ["render", "--figure", number, "-o", str(mine), "--impl", "starter"],
+                              capture_output=True, text=True, timeout=600)
+        assert done.returncode == 2 and "is not implemented yet" in done.stderr and "Traceback" not in done.stderr

@@ -13,7 +13,6 @@ import os
 import re
 import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -22,7 +21,7 @@ from cs451 import KIT_ROOT
 from cs451.grading.loader import load_tests
 from cs451.packaging.release import build_release
 
-from conftest import world_readable_dir
+from conftest import clean_env, world_readable_dir
 
 STAGE = "sphere"
 TESTS = load_tests(STAGE)
@@ -135,27 +134,33 @@ def test05_student_repository_holds_no_solution_no_hidden_test_and_no_truth(rele
 
 def workflow_commands(workflow: Path) -> list[str]:
     """The shell commands the workflow runs after setup, in order (run: and command: lines)."""
-    commands = re.findall(r"^\s+(?:run|command): (.+)$", workflow.read_text(), flags=re.M)
-    return [c for c in commands if c != "./setup.sh"]
+    return re.findall(r"^\s+(?:run|command): (.+)$", workflow.read_text(), flags=re.M)
 
 
 def run_workflow(release: Path) -> list[int]:
+    """The workflow's commands as written (its ./setup.sh first, which makes .venv), each in a clean environment as a
+    fresh runner's shell has: nothing of this machine's, no virtual environment activated."""
     codes = []
+    env = clean_env(release.parent / "home")
     for command in workflow_commands(release / ".github" / "workflows" / "classroom.yml"):
-        command = command.replace(".venv/bin/python", sys.executable)
-        codes.append(subprocess.run(command, shell=True, cwd=release, capture_output=True, timeout=600).returncode)
+        done = subprocess.run(command, shell=True, cwd=release, env=env, capture_output=True, text=True, timeout=1800)
+        assert command != "./setup.sh" or done.returncode == 0, done.stderr[-3000:]
+        codes.append(done.returncode)
     return codes
 
 
 def test06_the_workflow_grades_the_starter_zero_and_a_solution_full(release):
+    text = (release / ".github" / "workflows" / "classroom.yml").read_text()
+    assert "python -m" not in text and workflow_commands(release / ".github" / "workflows" / "classroom.yml")[1] \
+        .startswith(f".venv/bin/cs451 grade {STAGE} ")   # the console script the student types, not python -m
     codes = run_workflow(release)
-    assert codes[0] == 0 and all(c == 1 for c in codes[1:]) and len(codes) == 1 + 8  # grading, then one per task
+    assert codes[:2] == [0, 0] and all(c == 1 for c in codes[2:]) and len(codes) == 2 + 8  # set-up, grading, one per task
     results = json.loads((release / "results.json").read_text())
     assert results["score"] == 0 and not [t for t in results["tests"] if t["visibility"] != "visible"]
     for f in (KIT_ROOT / "reference" / STAGE).glob("*.py"):
         shutil.copy(f, release / STAGE / f.name)
     codes = run_workflow(release)
-    assert codes == [0] * 9
+    assert codes == [0] * 10
     results = json.loads((release / "results.json").read_text())
     assert results["score"] == pytest.approx(PUBLIC_POINTS)  # from the packaged answers
     report = (release / "report" / "report.html").read_text()
@@ -168,6 +173,30 @@ def test07_workflow_points_add_up_to_the_public_tests(release):
     assert text.count("_RESULTS:") == 8
 
 
+@pytest.mark.skipif(shutil.which("git") is None, reason="needs git")
+def test08_git_keeps_every_file_of_the_release_and_ignores_only_what_its_commands_write(tmp_path):
+    """A student commits the release as it is (`git add -A`): every file it ships is kept (the handout's figures
+    above all), and what set-up and the README's and handout's commands write is not."""
+    out = build_release(STAGE, tmp_path / "repo")
+    shipped = sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
+    assert [f for f in shipped if f.startswith("assignments/") and f.endswith(".png")], "no figures to keep"
+    subprocess.run(["git", "init", "-q"], cwd=out, check=True)
+
+    def ignored(paths: list[str]) -> set[str]:
+        done = subprocess.run(["git", "check-ignore", "--no-index", "--stdin"], cwd=out, input="\n".join(paths),
+                              capture_output=True, text=True)
+        assert done.returncode in (0, 1), done.stderr
+        return set(done.stdout.split())
+    assert ignored(shipped) == set()
+    written = ["mine.png", "S5.1-mine.png", "S5.1-compare.png", "compare.png", "orrery.png", "report/report.html",
+               "results.json", "demo/sphere-gouraud.png", ".venv/bin/python", f"{STAGE}/__pycache__/camera.cpython-311.pyc",
+               "cs451/__pycache__/cli.cpython-311.pyc", "cs451_kit.egg-info/PKG-INFO", ".cs451-cache/answers.npz"]
+    assert ignored(written) == set(written)
+    kept = ["assignments/01-sphere/figures/S9.9.png", "assignments/01-sphere/diagrams/new.png", f"{STAGE}/texture.png",
+            "my-scene.json"]
+    assert ignored(kept) == set()
+
+
 def test09_an_earlier_stage_reference_ships_only_when_asked(tmp_path):
     from cs451.errors import KitError
     from cs451.stages import get_stage
@@ -176,3 +205,24 @@ def test09_an_earlier_stage_reference_ships_only_when_asked(tmp_path):
     assert shipped == set(get_stage("radiosity").builds_on) == {"hemicube"}
     with pytest.raises(KitError, match="builds on"):
         build_release("radiosity", tmp_path / "other", include_reference=("radiosity",))
+
+
+def test10_a_release_that_draws_with_an_earlier_stage_says_how_to_copy_the_student_s_own_in(tmp_path, capsys):
+    """Stage 4 draws with a stage-3 hemicube: without --include-reference hemicube its release holds none, so
+    `cs451 release` warns and the release's README gives the command that copies the student's own package in
+    (tests/test_release_commands.py runs that command, then every render)."""
+    from cs451.cli import main
+    command = "cp -r ../your-hemicube-repository/hemicube ."
+    assert main(["release", "radiosity", "-o", str(tmp_path / "own")]) == 0
+    said = capsys.readouterr().err
+    assert "warning: stage radiosity draws with a stage-3 (hemicube) implementation and this release ships none" in said
+    assert command in said and "--include-reference hemicube" in said
+    readme = (tmp_path / "own" / "README.md").read_text()
+    assert f"```sh\n{command}\n```" in readme and readme.index(command) < readme.index("cs451 render cornell-box")
+    assert main(["release", "radiosity", "-o", str(tmp_path / "with"), "--include-reference", "hemicube"]) == 0
+    said = capsys.readouterr().err
+    assert "ships none" not in said and "the reference solution of hemicube" in said
+    assert "your-hemicube-repository" not in (tmp_path / "with" / "README.md").read_text()
+    assert main(["release", "sphere", "-o", str(tmp_path / "sphere")]) == 0
+    assert "warning" not in capsys.readouterr().err
+    assert "Before you render" not in (tmp_path / "sphere" / "README.md").read_text()

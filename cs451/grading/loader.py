@@ -7,15 +7,13 @@ written by :func:`write_manifest` when the copy is built.
 """
 from __future__ import annotations
 
-import importlib
 import json
-import sys
 from dataclasses import replace
 from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from .. import KIT_ROOT
+from .. import KIT_ROOT, import_from_kit
 from ..errors import KitError
 from ..stages import get_stage
 from .spec import Test
@@ -31,9 +29,7 @@ def _load_spec_module(stage: str, name: str) -> ModuleType | None:
     """Import autograder/<stage>/<name>.py in the grader's process (specs import each other as ``autograder.*``)."""
     if not (spec_dir(stage) / f"{name}.py").exists():
         return None
-    if str(KIT_ROOT) not in sys.path:
-        sys.path.insert(0, str(KIT_ROOT))
-    return importlib.import_module(f"autograder.{stage}.{name}")
+    return import_from_kit(f"autograder.{stage}.{name}")
 
 
 def _declared(stage: str, include_hidden: bool) -> list[Test]:

@@ -22,6 +22,8 @@ from typing import Any, Callable, Literal
 
 import numpy as np
 
+from .. import import_from_kit
+
 Outputs = dict[str, np.ndarray]
 
 #: Modules a check may come from (they ship to students) and modules a truth may come from (they never do).
@@ -77,7 +79,9 @@ class Ref:
     def resolve(self, allowed: re.Pattern) -> Callable[..., Any]:
         if not allowed.match(self.module):
             raise ValueError(f"{self.module}.{self.name}: not a module specs may name here")
-        fn = getattr(importlib.import_module(self.module), self.name, None)
+        module = import_from_kit(self.module) if self.module.startswith("autograder.") \
+            else importlib.import_module(self.module)
+        fn = getattr(module, self.name, None)
         if not callable(fn):
             raise ValueError(f"{self.module}.{self.name}: no such function")
         return fn

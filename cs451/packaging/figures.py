@@ -28,8 +28,20 @@ from ..stages import get_stage
 BLOCK = re.compile(r"(<!-- figures -->\n)(.*?)(<!-- /figures -->)", re.S)
 INTRO = ("What the reference draws for each public image test (rendered from the reference solution by the kit; "
          "your render should match it within the test's tolerance). To see yours beside one, judged as the test "
-         "judges it, render the same scene at the figure's size and give both PNGs to the compare command: "
-         "cs451 compare mine.png {example}.\n\n")
+         "judges it, draw the figure with your package and give both PNGs to the compare command (here {number}; "
+         "for another figure, put its number in both places):\n\n"
+         "```sh\n{recipe}\n```\n\n"
+         "`--figure` draws the figure's own test as the grader does: the test's scene, size and settings, and the "
+         "reference's answers to the earlier tasks the test gives your function. "
+         "The compare command exits with 1 when the two differ by more than the test allows, and writes them "
+         "side by side with the error maps.\n\n")
+
+
+def recipe(number: str, handout: str) -> str:
+    """The command line that draws a figure with the reader's package and compares it with the figure."""
+    mine = f"{number}-mine.png"
+    return (f"cs451 render --figure {number} -o {mine} --impl my-submission && "
+            f"cs451 compare {mine} assignments/{handout}/figures/{number}.png -o {number}-compare.png")
 
 
 @dataclass(frozen=True)
@@ -64,12 +76,13 @@ def stage_figures(stage: str, show_progress: bool = True) -> list[Figure]:
     return out
 
 
-def block_text(figures: list[Figure], handout: str) -> str:
+def block_text(figures: list[Figure], stage: str) -> str:
     if not figures:
         return ""
     rows = "".join(f"| ![{f.test.number}](figures/{f.name}) | **{f.test.number}** {f.test.name} |\n" for f in figures)
-    example = f"assignments/{handout}/figures/{figures[0].name}"
-    return INTRO.format(example=example) + "| target | test |\n|---|---|\n" + rows + "\n"
+    first = figures[0].test.number
+    intro = INTRO.format(number=first, recipe=recipe(first, get_stage(stage).handout))
+    return intro + "| target | test |\n|---|---|\n" + rows + "\n"
 
 
 def _handout(stage: str) -> Path:
@@ -89,7 +102,7 @@ def write_figures(stage: str) -> list[Path]:
         if old.name not in {f.name for f in figures}:
             old.unlink()
     written = [save_png(folder / f.name, f.image) for f in figures]
-    block = block_text(figures, get_stage(stage).handout)
+    block = block_text(figures, stage)
     handout.write_text(BLOCK.sub(lambda m: m.group(1) + block + m.group(3), text))
     return written + [handout]
 
@@ -100,7 +113,7 @@ def check_figures(stage: str, tolerance: ImageTolerance = ImageTolerance()) -> l
     figures = stage_figures(stage, show_progress=False)
     problems = []
     match = BLOCK.search(handout.read_text())
-    if match is None or match.group(2) != block_text(figures, get_stage(stage).handout):
+    if match is None or match.group(2) != block_text(figures, stage):
         problems.append(f"{handout.relative_to(KIT_ROOT)}: the figures block is not what `cs451 figures` writes")
     folder = handout.parent / "figures"
     for f in figures:

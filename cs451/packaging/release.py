@@ -29,6 +29,21 @@ SHIPPED_SPEC_FILES = ("__init__.py", "checks.py")
 KIT_FOLDER = "kit"
 
 
+#: The release's .gitignore: what set-up and the commands its README and handout name write, anchored at the top
+#: so that nothing the release ships (the handout's figures and diagrams above all) is ever ignored.
+GITIGNORE = """# what ./setup.sh writes
+/.venv/
+*.egg-info/
+__pycache__/
+/.cs451-cache/
+# what the README's and the handout's commands write: renders and comparisons at the top, reports, demos
+/*.png
+/report/
+/results.json
+/demo/
+"""
+
+
 def _engine_litter(folder: str, names: list[str]) -> set[str]:
     """What ``copy_tree("cs451", …)`` leaves out of a release: the usual litter, and the lecturers' folders."""
     left = set(LITTER(folder, names))
@@ -54,7 +69,7 @@ jobs:
       - name: Set up the kit (Mesa's EGL for headless OpenGL, a Python virtual environment)
         run: ./setup.sh
       - name: Grade the public tests (the same as `cs451 grade {stage} --submission . --public-only`)
-        run: .venv/bin/python -m cs451 grade {stage} --submission . --public-only --results results.json --report report --student-view
+        run: .venv/bin/cs451 grade {stage} --submission . --public-only --results results.json --report report --student-view
       - name: Keep the image report (reference, yours, difference, error map)
         if: always()
         uses: actions/upload-artifact@v4
@@ -69,7 +84,7 @@ WORKFLOW_TASK = """      - name: {id} {title}
         with:
           test-name: {id} {title}
           setup-command: ''
-          command: .venv/bin/python -m cs451 autograder passed results.json {id}
+          command: .venv/bin/cs451 autograder passed results.json {id}
           timeout: 1
           max-score: {points:g}
 """
@@ -99,7 +114,7 @@ On Debian or Ubuntu (or WSL on Windows), from this folder:
 source .venv/bin/activate     # puts `cs451` on your path
 ```
 
-## Work, look, check
+{earlier}## Work, look, check
 
 Edit the files in `{stage}/`; the handout names the function of every task. Then:
 
@@ -123,6 +138,51 @@ grade: the grade comes from your instructor's grader, with the hidden tests. If 
 folder another way, make it a repository of your own with `git init`, `git add -A` and
 `git commit -m start`, then push it to a new repository on GitHub.
 """
+
+
+EARLIER_SECTION = """## Before you render: your stage-{number} `{earlier}/`
+
+This stage draws with a stage-{number} ({earlier}) implementation, and this repository holds none: until
+you copy in your own `{earlier}/` package, `cs451 render` and `cs451 demo` stop and say so. Copy it from
+your stage-{number} repository (`{source}` stands for wherever that repository is), beside `{stage}/`:
+
+```sh
+{command}
+```
+
+The grade does not depend on it: the tests give your functions the patches and form factors themselves.
+
+"""
+
+
+def copy_command(earlier: str) -> str:
+    """The command a release's README gives to copy the student's own earlier-stage package in."""
+    return f"cp -r {earlier_source(earlier)}/{earlier} ."
+
+
+def earlier_source(earlier: str) -> str:
+    """Where the README says the student's earlier-stage repository is (a name that reads as a placeholder)."""
+    return f"../your-{earlier}-repository"
+
+
+def missing_earlier(stage: str, include_reference: tuple[str, ...] = ()) -> list[str]:
+    """The earlier stages whose implementation ``stage`` draws with and that a release without their reference lacks."""
+    return [e for e in get_stage(stage).builds_on if e not in include_reference]
+
+
+def release_warnings(stage: str, include_reference: tuple[str, ...] = ()) -> list[str]:
+    """What ``cs451 release`` warns about: references it ships, and earlier stages it cannot draw without."""
+    out = []
+    if include_reference:
+        out.append(f"the release ships the reference solution of {', '.join(include_reference)}: give it to students "
+                   "only after that stage's deadline")
+    for earlier in missing_earlier(stage, include_reference):
+        n = get_stage(earlier).number
+        out.append(f"stage {stage} draws with a stage-{n} ({earlier}) implementation and this release ships none: "
+                   f"`cs451 render` and `cs451 demo` fail there until a student copies in their own {earlier}/ package "
+                   f"(its README says how: `{copy_command(earlier)}`); grading works without it. After stage "
+                   f"{n}'s deadline, build with --include-reference {earlier} to ship the reference instead")
+    return out
 
 
 def workflow_text(stage: str) -> str:
@@ -209,9 +269,13 @@ def build_release(stage: str, output: str | Path, include_reference: tuple[str, 
     hidden_line = (f"After the deadline, {hidden['count']} hidden tests ({hidden['points']:g} points) check the "
                    "same tasks on scenes and parameters you have not seen." if hidden["count"] else "")
     scene = stage if (ENGINE_DIR / "scenes" / f"{stage}.json").exists() else "cornell-box"
+    earlier = "".join(EARLIER_SECTION.format(number=get_stage(e).number, earlier=e, stage=stage,
+                                             source=earlier_source(e), command=copy_command(e))
+                      for e in missing_earlier(stage, include_reference))
     (out / "README.md").write_text(README.format(title=st.title, number=st.number, stage=stage, scene=scene,
-                                                 handout=f"assignments/{st.handout}/README.md", hidden=hidden_line))
+                                                 handout=f"assignments/{st.handout}/README.md", hidden=hidden_line,
+                                                 earlier=earlier))
     (out / MARKER).write_text(json.dumps({"stage": stage, "kit_version": __version__,
                                            "includes_reference": list(include_reference)}, indent=2) + "\n")
-    (out / ".gitignore").write_text(".venv/\n__pycache__/\n*.egg-info/\n.cs451-cache/\nreport/\nresults.json\n*.png\n")
+    (out / ".gitignore").write_text(GITIGNORE)
     return out
