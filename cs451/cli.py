@@ -138,6 +138,13 @@ def _cmd_slides(a: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_warm(a: argparse.Namespace) -> int:
+    from .warm import warm
+    done = warm([a.stage] if a.stage else None)
+    print(f"warm: {len(done)} steps in {sum(s for _, s in done):.1f} s; first renders and demos compile nothing now")
+    return 0
+
+
 def _cmd_scenes(a: argparse.Namespace) -> int:
     from .scene import bundled_scenes, load_scene
     for name in bundled_scenes():
@@ -286,6 +293,12 @@ def build_parser() -> argparse.ArgumentParser:
     agr.add_argument("--tasks", help="only these tasks' tests (for testing the autograder)")
     for p_ in (agb, agw, agr):
         p_.set_defaults(func=_cmd_autograder)
+
+    w = sub.add_parser("warm", help="compile, once, what a first render or demo would (setup.sh does this)",
+                       description="Compile the reference's kernels (the ray tracer's) now, so that no first render "
+                                   "or lecture demo waits for a compiler; numba's cache keeps them.")
+    w.add_argument("stage", nargs="?", choices=stages, help="one stage (default: all)")
+    w.set_defaults(func=_cmd_warm)
 
     s = sub.add_parser("starter", help="regenerate starter/ from reference/", description="Regenerate starter/ from the solution regions of reference/.")
     s.add_argument("--check", action="store_true", help="only check: exit 1 if starter/ has drifted")

@@ -7,6 +7,7 @@ rasteriser give the same grades (README, "Tolerances").
 """
 from __future__ import annotations
 
+import ctypes
 import os
 import re
 import sys
@@ -14,23 +15,51 @@ from typing import Any
 
 from .errors import KitError
 
-#: The fix for a missing OpenGL, per platform: the error names the one for the machine it is on.
+#: GLVND's libraries for OpenGL through EGL on Linux, by the versioned names the runtime packages install.
+#: glcontext and PyOpenGL look for ``libGL.so``/``libEGL.so`` by default: those unversioned names come only
+#: with the -dev packages, and ``libGL.so.1`` carries GLX, which loads X libraries a GPU server may not have.
+#: ``libOpenGL.so.0`` is desktop OpenGL without GLX (DESIGN.md, "Environment facts").
+LINUX_LIBRARIES = {"libegl": "libEGL.so.1", "libgl": "libOpenGL.so.0"}
+#: The Debian/Ubuntu package of each library the kit loads, and of Mesa's EGL driver (llvmpipe).
+LINUX_PACKAGES = {"libEGL.so.1": "libegl1", "libOpenGL.so.0": "libopengl0"}
+MESA_PACKAGES = ("libegl-mesa0", "libgl1-mesa-dri")
+
+#: The fix for a missing OpenGL on the other platforms (Linux's names the missing library, see linux_fix).
 FIXES = {
-    "linux": "install Mesa's EGL driver: sudo apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri "
-             "(or run ./setup.sh, which does it for you)",
     "darwin": "macOS gives OpenGL 3.3 through CGL on every Mac since 2012; if this fails, use the kit's Docker "
-              "image or dev container (README, 'Every platform'), which render with Mesa's llvmpipe",
+              "image or dev container (README, 'Installing on your machine'), which render with Mesa's llvmpipe",
     "win32": "use WSL2 (Ubuntu) and run ./setup.sh there, or update your graphics driver for OpenGL 3.3; "
-             "the kit's Docker image and dev container work too (README, 'Every platform')",
+             "the kit's Docker image and dev container work too (README, 'Installing on your machine')",
 }
-EGL_FIX = FIXES["linux"]
 
 
-def _backends() -> list[str | None]:
-    """Which moderngl backends to try on this platform, in order (None: the platform's default)."""
+def missing_linux_libraries() -> list[str]:
+    """Which of the GL libraries the kit loads on Linux cannot be loaded here."""
+    missing = []
+    for name in LINUX_PACKAGES:
+        try:
+            ctypes.CDLL(name)
+        except OSError:
+            missing.append(name)
+    return missing
+
+
+def linux_fix() -> str:
+    """What to install on this Linux machine: the missing libraries' packages, else Mesa's EGL driver."""
+    missing = missing_linux_libraries()
+    if missing:
+        packages = " ".join(LINUX_PACKAGES[name] for name in missing)
+        return f"{' and '.join(missing)} cannot be loaded: sudo apt-get install {packages}"
+    return ("the GL libraries load but no EGL driver made a context: install Mesa's "
+            f"(sudo apt-get install {' '.join(MESA_PACKAGES)}) or your GPU's driver")
+
+
+def _attempts() -> list[dict[str, str]]:
+    """The moderngl context arguments to try on this platform, in order ({}: the platform's default)."""
     if sys.platform.startswith("linux"):
-        return ["egl", None] if os.environ.get("DISPLAY") else ["egl"]
-    return [None]
+        attempts = [{"backend": "egl", **LINUX_LIBRARIES}, {"backend": "egl"}]
+        return attempts + [{}] if os.environ.get("DISPLAY") else attempts
+    return [{}]
 
 
 def _prepare_environment() -> None:
@@ -47,14 +76,14 @@ def create_context(require: int = 330) -> Any:
     except ImportError as err:  # pragma: no cover - setup installs it
         raise KitError(f"moderngl is not installed ({err}); run ./setup.sh") from None
     errors = []
-    for backend in _backends():
+    for kwargs in _attempts():
         try:
-            kwargs = {"backend": backend} if backend else {}
             return moderngl.create_standalone_context(require=require, **kwargs)
         except Exception as err:  # moderngl raises bare Exception for loader failures
-            errors.append(f"{backend or 'default'}: {str(err).strip().splitlines()[0] if str(err).strip() else err!r}")
-    platform = "linux" if sys.platform.startswith("linux") else sys.platform
-    fix = FIXES.get(platform, FIXES["linux"])
+            text = str(err).strip()
+            errors.append(f"{kwargs.get('backend', 'default')}{'/' + kwargs['libgl'] if 'libgl' in kwargs else ''}: "
+                          f"{text.splitlines()[0] if text else repr(err)}")
+    fix = linux_fix() if sys.platform.startswith("linux") else FIXES.get(sys.platform, FIXES["win32"])
     raise KitError(f"cannot create an OpenGL {require // 100}.{require // 10 % 10} context ({'; '.join(errors)}); {fix}")
 
 

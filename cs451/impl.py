@@ -3,11 +3,13 @@ from __future__ import annotations
 
 import hashlib
 import importlib.util
+import os
 import sys
 from pathlib import Path
 from types import ModuleType
 
 from . import KIT_ROOT
+from .caches import kit_cache
 from .errors import KitError, SubmissionError
 
 
@@ -49,12 +51,30 @@ def earlier_stage_impl(stage: str) -> Path:
                    f"for a release built with --include-reference {stage})")
 
 
+def _keep_numba_cache_by_path() -> None:
+    """Make numba cache by the source's absolute folder, in the kit's cache (``numba``), not in ``__pycache__``.
+
+    A package is imported under a name made from its path (below), and numba's machine code refers to the
+    module by that name. In ``__pycache__`` the code travels with a copy of the package (``cp -a``, ``git mv``)
+    and is loaded there under the old name: ``ModuleNotFoundError: _cs451_impl_whitted_…``. Kept by folder,
+    a copy compiles its own. Set before any kernel is decorated; numba reads the variable when it is imported.
+    """
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return
+    folder = str(kit_cache("numba"))
+    os.environ["NUMBA_CACHE_DIR"] = folder
+    config = sys.modules.get("numba.core.config")
+    if config is not None:
+        config.CACHE_DIR = folder   # type: ignore[attr-defined]
+
+
 def load_impl(folder: Path, stage: str) -> ModuleType:
     """Import a stage package from a folder under a private name, so two implementations never clash."""
     digest = hashlib.sha1(str(folder).encode()).hexdigest()[:10]
     name = f"_cs451_impl_{stage}_{digest}"
     if name in sys.modules:
         return sys.modules[name]
+    _keep_numba_cache_by_path()
     spec = importlib.util.spec_from_file_location(name, folder / "__init__.py",
                                                   submodule_search_locations=[str(folder)])
     if spec is None or spec.loader is None:

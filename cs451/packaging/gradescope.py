@@ -39,7 +39,7 @@ export DEBIAN_FRONTEND=noninteractive
 if [ -z "${{CS451_SKIP_SYSTEM_PACKAGES:-}}" ]; then   # (the kit's tests reuse the machine's packages)
   apt-get update -qq
   apt-get install -y -qq --no-install-recommends python3 python3-venv python3-pip bubblewrap \\
-      libegl1 libegl-mesa0 libgl1-mesa-dri libglu1-mesa >/dev/null
+      libegl1 libopengl0 libegl-mesa0 libgl1-mesa-dri >/dev/null   # EGL and GL by versioned names (cs451/gl.py)
 fi
 rm -rf "$KIT" && mkdir -p "$KIT" && cp -a "$SOURCE/." "$KIT/"
 if [ -n "${{CS451_VENV:-}}" ]; then                 # (the kit's tests reuse an environment)
@@ -151,9 +151,12 @@ def simulated_env(root: Path, venv: str) -> dict[str, str]:
 
     The kit goes to ``top/opt/cs451-kit`` as setup.sh would put it in ``/opt``; the system packages
     are taken as installed and the Python environment ``venv`` is reused (building one takes minutes).
+    Nothing else is inherited from the caller: Gradescope's root shell has none of this machine's
+    ``PYTHON*`` settings (``PYTHONDONTWRITEBYTECODE`` once hid bytecode left readable in the kit).
     """
     kit = root.parent / "opt" / "cs451-kit"
-    return {**os.environ, "AUTOGRADER_ROOT": str(root), "CS451_HOME": str(kit), "CS451_SKIP_SYSTEM_PACKAGES": "1",
+    return {"PATH": "/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin", "HOME": os.environ.get("HOME", "/root"),
+            "LANG": "C.UTF-8", "AUTOGRADER_ROOT": str(root), "CS451_HOME": str(kit), "CS451_SKIP_SYSTEM_PACKAGES": "1",
             "CS451_VENV": venv, "CS451_PYTHON": str(kit / ".venv" / "bin" / "python")}
 
 

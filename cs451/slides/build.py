@@ -22,6 +22,7 @@ from typing import Any
 from jinja2 import Environment, FileSystemLoader, StrictUndefined
 
 from .. import KIT_ROOT, __version__
+from ..caches import kit_cache
 from ..errors import KitError
 from ..progress import Progress
 from .deck import Deck, deck_files, deck_name, read_deck
@@ -51,10 +52,7 @@ def default_cache() -> Path:
     hidden from submissions), else the user's cache folder where the kit cannot be written (an installed wheel)."""
     if os.environ.get("CS451_SLIDES_CACHE"):
         return Path(os.environ["CS451_SLIDES_CACHE"])
-    kit_cache = KIT_ROOT / ".cs451-cache"
-    if os.access(kit_cache if kit_cache.exists() else KIT_ROOT, os.W_OK):
-        return kit_cache / "slides"
-    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "cs451" / "slides"
+    return kit_cache("slides")
 
 
 def _vendored(rel: str) -> str:

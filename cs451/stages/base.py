@@ -82,6 +82,9 @@ class Stage:
     #: diagrams() -> {file name: draw() -> uint8 RGB image}: the handout's explanatory pictures
     #: (:mod:`cs451.packaging.diagrams`), loaded only when asked for
     diagrams: Callable[[], dict[str, Callable[[], np.ndarray]]] | None = None
+    #: warm(module) -> [(what, do())]: the steps that compile, once, what a first render or demo of the stage
+    #: would compile, so that ``cs451 warm`` (setup.sh) pays it rather than a first render or a lecture
+    warm: Callable[[Any], list[tuple[str, Callable[[], Any]]]] | None = None
 
     def task(self, task_id: str) -> Task:
         for t in self.tasks:

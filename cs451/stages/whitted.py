@@ -406,8 +406,34 @@ def demo(module: Any, output: Any, window: bool, frames: int | None, scene: str 
     return whitted_demo(module, output, window, frames, scene=scene, size=size, screenshot=screenshot)
 
 
+#: Camera rays at this size make batches large enough for an implementation's compiled path (the reference's
+#: kernels take batches of 10,000 rays and more: reference/whitted/bvh.py).
+WARM_SIZE = (160, 120)
+
+
+def warm(impl: Any) -> list[tuple[str, Callable[[], Any]]]:
+    """What a first render or demo compiles in the reference (numba kernels; a numpy submission compiles
+    nothing): a frame without a hierarchy and one with it, then closest hits (W5) and shadow rays (W7) on
+    their own, which the demo's ray trees and switches cast bounce by bounce."""
+    from ..scene import load_scene
+
+    def frame(name: str) -> None:
+        render(load_scene(name), impl, size=WARM_SIZE)
+
+    def queries() -> None:
+        scene = load_scene("rippled-torus")
+        ts = prepare(scene, impl)
+        origins, directions = _camera_rays(impl, scene.camera, *WARM_SIZE)
+        STAGE.call(impl, "W5", ts, origins, directions)
+        STAGE.call(impl, "W7", ts, origins, origins + directions)
+
+    return [("a frame of spheres", lambda: frame("whitted")),
+            ("a frame of a mesh, with its hierarchy", lambda: frame("rippled-torus")),
+            ("closest hits and shadow rays, as the demo casts them", queries)]
+
+
 STAGE = Stage(
     name="whitted", number=2, title="Whitted ray tracing", handout="02-whitted", tasks=TASKS, render=render,
     probes=PROBES, demo=demo, options_type=WhittedOptions, draws=(Sphere, Plane, Polygon, Mesh, PointLight, AreaLight),
-    estimate=estimate,
+    estimate=estimate, warm=warm,
 )
