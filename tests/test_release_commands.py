@@ -12,8 +12,8 @@ solution copied into the student's package. With the starter a command may only 
 every ``cs451 grade`` gives every public point. Every handout figure's "compare with the figure"
 recipe is run for every figure of the stage. A stage that draws with an earlier stage's package gets
 the student's finished one from where its README's ``cp`` command takes it. The fast suite runs them
-for stage 1 and checks every stage's commands and paths without running them; the slow one runs
-every stage.
+for stage 1 and checks every stage's commands and paths without running them; the slow and seat runs
+(CI: ``-m seat``) run every stage.
 """
 from __future__ import annotations
 
@@ -33,6 +33,7 @@ from cs451.stages import stage_names
 from cs451.stages import get_stage
 
 from conftest import set_up_release, world_readable_dir
+from seats.measured import record
 
 SKIPPED = ("./setup.sh", "source .venv/bin/activate")   # set-up: set_up_release runs it, and the PATH it gives
 COMMAND_WORDS = ("cs451 ", "cp ", "mkdir ")
@@ -182,8 +183,9 @@ def _run_stage(stage: str, top: Path) -> None:
     assert figure_problems(release, stage, env, solved=True) == []
     graded = run(f"cs451 grade {stage} --results results.json", release, env)
     results = json.loads((release / "results.json").read_text())
-    assert graded.returncode == 0 and results["score"] == sum(t["max_score"] for t in results["tests"]) > 0, \
-        graded.stdout[-3000:] + graded.stderr[-2000:]
+    points = sum(t["max_score"] for t in results["tests"])
+    assert graded.returncode == 0 and results["score"] == points > 0, graded.stdout[-3000:] + graded.stderr[-2000:]
+    record("releases", {stage: {"finished_student": f"{results['score']:g}/{points:g} public points, exit 0"}})
 
 
 def test02_stage_1_commands_work_with_the_starter_and_with_a_solution():
@@ -195,6 +197,7 @@ def test02_stage_1_commands_work_with_the_starter_and_with_a_solution():
 
 
 @pytest.mark.slow
+@pytest.mark.seat
 @pytest.mark.parametrize("stage", STAGES[1:])
 def test03_every_stage_s_commands_work_with_the_starter_and_with_a_solution(stage):
     top = world_readable_dir("cs451-release-run-")

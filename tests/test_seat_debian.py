@@ -24,6 +24,7 @@ from cs451.scene import bundled_scenes, load_scene
 from cs451.stages import get_stage, stage_names
 
 from seats.debian import fresh_machine, missing_tools
+from seats.measured import FOLDER, record
 from test_containers import readme_commands
 
 pytestmark = [pytest.mark.seat, pytest.mark.skipif(missing_tools() is not None, reason=str(missing_tools()))]
@@ -36,8 +37,6 @@ COMPILING = "compiling the ray tracer's kernels"
 LOADED_LIBRARIES = ("from cs451.gl import create_context; create_context(); "
                     "from cs451.pyrender_shim import pyrender; pyrender.OffscreenRenderer(8, 8); "
                     "print(*sorted({l.split('/')[-1] for l in open('/proc/self/maps') if '.so' in l}))")
-#: Where the measurements of the last run go, for the README and the closing notes.
-MEASURED = Path("/var/tmp/cs451-seats/measured-debian.json")
 
 
 def kit_files() -> list[Path]:
@@ -86,7 +85,7 @@ def test01_the_readme_set_up_runs_the_main_job_through_the_versioned_gl_librarie
     assert all(any(n.startswith(lib) for n in names) for lib in ("libEGL.so.1", "libOpenGL.so.0")), names
     assert not {n for n in names if n.startswith(("libGL.so", "libGLX"))}, f"the kit loaded GLX: {sorted(names)}"
     mine = load_png(debian.path(f"{KIT}/sphere.png"))
-    here = MEASURED.with_name("sphere-here.png")
+    here = FOLDER / "sphere-here.png"   # beside the measurements
     subprocess.run([str(KIT_ROOT / ".venv" / "bin" / "cs451"), "render", "sphere", "-o", str(here)],
                    check=True, capture_output=True)
     assert mine.shape == (500, 500, 3)
@@ -140,9 +139,7 @@ def test03_every_reference_gets_full_marks_in_the_sandbox_through_the_console_sc
 
 
 def _record(values: dict) -> None:
-    MEASURED.parent.mkdir(parents=True, exist_ok=True)
-    old = json.loads(MEASURED.read_text()) if MEASURED.exists() else {}
-    MEASURED.write_text(json.dumps({**old, **values}, indent=2) + "\n")
+    record("debian", values)
 
 
 def test04_the_readme_test_command_runs_there_and_nothing_skips(debian):
