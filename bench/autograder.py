@@ -22,6 +22,7 @@ import time
 from pathlib import Path
 
 from cs451 import KIT_ROOT
+from cs451.grading.results import total_score
 from cs451.packaging.gradescope import GRADESCOPE_BUDGET, build_gradescope, setup_like_gradescope
 from cs451.stages import stage_names
 
@@ -86,7 +87,7 @@ def measure(stage: str, modes: tuple[str, ...] = ("bubblewrap", "uid")) -> list[
                 shutil.copytree(KIT_ROOT / who / stage, root / "submission" / stage)
                 seconds, peak, code = _run_measured([str(root / "source" / "run_autograder")], {**env, "CS451_SANDBOX": mode})
                 results = json.loads((root / "results" / "results.json").read_text())
-                rows.append({"stage": stage, "sandbox": mode, "submission": who, "score": results.get("score"),
+                rows.append({"stage": stage, "sandbox": mode, "submission": who, "score": total_score(results),
                              "tests": len(results.get("tests", [])), "seconds": round(seconds, 1),
                              "peak_mb": round(peak), "setup_s": round(setup_s, 1), "exit": code})
         return rows

@@ -82,7 +82,7 @@ def test_the_installed_command_renders_and_grades_away_from_the_checkout(wheel, 
     done = _cs451(python, "starter", "--check", cwd=elsewhere)
     assert done.returncode == 0 and "in step" in done.stdout, done.stdout + done.stderr
     done = _cs451(python, "grade", "sphere", "--submission", "reference", "--tasks", "S1,S2", cwd=elsewhere)
-    assert done.returncode == 0 and "total: 20 / 20" in done.stdout, done.stdout[-1500:] + done.stderr[-1500:]
+    assert done.returncode == 0 and "total with the hidden tests: 20 / 20" in done.stdout, done.stdout[-1500:] + done.stderr[-1500:]
 
 
 STEAL = """
@@ -109,7 +109,7 @@ def test_a_fresh_venv_installs_the_wheel_and_grades_a_folder_in_the_sandbox(whee
                         ignore=shutil.ignore_patterns("__pycache__"))
         os.system(f"chmod -R a+rX {top}")
         done = _cs451(python, "grade", "sphere", "--submission", str(top / "mine"), cwd=top)
-        assert done.returncode == 0 and "total: 100 / 100" in done.stdout, done.stdout[-2000:] + done.stderr[-1500:]
+        assert done.returncode == 0 and "total with the hidden tests: 100 / 100" in done.stdout, done.stdout[-2000:] + done.stderr[-1500:]
         assert "isolation: bubblewrap" in done.stdout
 
         # the starter, which takes the installed kit's reference if it can read it: it must score nothing
@@ -121,6 +121,6 @@ def test_a_fresh_venv_installs_the_wheel_and_grades_a_folder_in_the_sandbox(whee
         init.write_text(init.read_text() + STEAL.format(reference=f"{site}/cs451_kit/reference/sphere"))
         os.system(f"chmod -R a+rX {top}")
         done = _cs451(python, "grade", "sphere", "--submission", str(top / "thief"), cwd=top)
-        assert done.returncode == 0 and "total: 0 / 100" in done.stdout, done.stdout[-2000:] + done.stderr[-1500:]
+        assert done.returncode == 0 and "total with the hidden tests: 0 / 100" in done.stdout, done.stdout[-2000:] + done.stderr[-1500:]
     finally:
         shutil.rmtree(top, ignore_errors=True)

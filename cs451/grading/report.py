@@ -91,14 +91,22 @@ def _row(r) -> dict:
 
 
 def render_report(result: GradeResult, show_hidden: bool = True) -> str:
-    """The report as HTML; with ``show_hidden=False`` hidden tests are counted, not shown (the student's view)."""
+    """The report as HTML; with ``show_hidden=False`` hidden tests are counted, not shown (the student's view).
+
+    The headline counts the visible tests; the hidden tests' points, when shown, are on a line of their own."""
     shown = [r for r in result.results if show_hidden or not r.test.hidden]
     failed = [dict(_row(r), figures=figures(r.verdict.images)) for r in shown if not r.verdict.passed]
     passed = [dict(_row(r), figures=figures(r.verdict.images)) for r in shown if r.verdict.passed]
+    visible = [r for r in shown if not r.test.hidden]
+    held = [r for r in shown if r.test.hidden]
+    held_back = not show_hidden and any(r.test.hidden for r in result.results)   # its time counts the hidden tests
     return _env.get_template("report.html.j2").render(
-        stage=result.stage, submission=str(result.submission), seconds=result.seconds, isolation=result.isolation,
-        score=sum(r.score for r in shown), total=sum(r.test.points for r in shown),
-        hidden_note=hidden_note(result, show_hidden), problems=result.problems, rows=[_row(r) for r in shown],
+        stage=result.stage, submission=str(result.submission),
+        seconds=None if held_back else result.seconds, isolation=result.isolation,
+        score=sum(r.score for r in visible), total=sum(r.test.points for r in visible),
+        hidden_score=sum(r.score for r in held), hidden_total=sum(r.test.points for r in held),
+        hidden_note=hidden_note(result, show_hidden), problems=result.problems,
+        rows=[_row(r) for r in shown],
         failed=failed, passed=passed)
 
 

@@ -18,7 +18,11 @@ from .runner import GradeResult
 
 
 def to_gradescope(result: GradeResult) -> dict[str, Any]:
-    """Gradescope's results.json: per-test text output, and an HTML summary with thumbnails of failed image tests."""
+    """Gradescope's results.json: per-test text output, and an HTML summary with thumbnails of failed image tests.
+
+    With hidden tests in it, no top-level ``score`` (Gradescope's "overrides total of tests if specified") and no
+    ``execution_time``: Gradescope then adds up the tests' own scores, hidden ones included, and a student sees
+    that total only once the hidden tests are shown; before, only the visible tests' points (the summary's)."""
     tests = []
     for r in result.results:
         t = r.test
@@ -26,11 +30,21 @@ def to_gradescope(result: GradeResult) -> dict[str, Any]:
         if r.output.strip():
             output += "\n\nYour code printed:\n" + r.output.strip()[:MAX_PRINTED]
         tests.append({"score": r.score, "max_score": t.points, "status": "passed" if r.verdict.passed else "failed",
-                      "name": t.name, "number": t.number, "output": output, "output_format": "text",
+                      "name": t.name, "number": t.number, "output": output,
+                      "output_format": "text",
                       "tags": [t.task], "visibility": t.visibility})
-    return {"score": round(result.score, 4), "execution_time": round(result.seconds, 2),
-            "output": _summary_html(result), "output_format": "html",
-            "visibility": "visible", "stdout_visibility": "hidden", "tests": tests}
+    data: dict[str, Any] = {"output": _summary_html(result), "output_format": "html",
+                            "visibility": "visible", "stdout_visibility": "hidden", "tests": tests}
+    if not any(r.test.hidden for r in result.results):
+        data = {"score": round(result.score, 4), "execution_time": round(result.seconds, 2), **data}
+    return data
+
+
+def total_score(data: dict[str, Any]) -> float:
+    """The score Gradescope records for a results.json: its top-level score if given, else its tests' scores added."""
+    if "score" in data:
+        return float(data["score"])
+    return round(sum(float(t.get("score", 0)) for t in data.get("tests", [])), 4)
 
 
 #: Characters of a test's printed output kept in results.json (Gradescope pages get slow beyond that).
@@ -74,7 +88,9 @@ def write_results(path: str | Path, result: GradeResult) -> Path:
 
 
 def format_table(result: GradeResult, width: int = 100) -> str:
-    """The per-test table printed by ``cs451 grade``: every failure's message whole, wrapped under its test."""
+    """The per-test table printed by ``cs451 grade``: every failure's message whole, wrapped under its test.
+
+    Its totals count the visible tests; with hidden tests graded, one more line (the grader's) counts them too."""
     import textwrap
     indent = " " * 27
     lines = [f"{'test':<7} {'points':>11}  {'':4} name / message", "-" * width]
@@ -84,16 +100,24 @@ def format_table(result: GradeResult, width: int = 100) -> str:
         hidden = " [hidden]" if t.hidden else ""
         lines.append(f"{t.number:<7} {r.score:>5g} / {t.points:<3g}  {mark:4} {t.name}{hidden}")
         if not r.verdict.passed:
-            lines += textwrap.wrap(r.verdict.message, width, initial_indent=indent, subsequent_indent=indent,
-                                   break_long_words=True, break_on_hyphens=False)
+            lines += textwrap.wrap(r.verdict.message, width, initial_indent=indent,
+                                   subsequent_indent=indent, break_long_words=True, break_on_hyphens=False)
     lines.append("-" * width)
+    visible = [r for r in result.results if not r.test.hidden]
+    held = len(visible) < len(result.results)
     by_task: dict[str, list[float]] = {}
-    for r in result.results:
+    for r in visible:
         acc = by_task.setdefault(r.test.task, [0.0, 0.0])
         acc[0] += r.score
         acc[1] += r.test.points
-    lines.append("by task: " + "  ".join(f"{k} {v[0]:g}/{v[1]:g}" for k, v in by_task.items()))
-    lines.append(f"total: {result.score:g} / {result.max_score:g}   ({result.seconds:.1f} s)")
+    lines.append(f"by task{' (visible tests)' if held else ''}: " +
+                 "  ".join(f"{k} {v[0]:g}/{v[1]:g}" for k, v in by_task.items()))
+    seconds = f"   ({result.seconds:.1f} s)"
+    lines.append(f"total: {sum(r.score for r in visible):g} / {sum(r.test.points for r in visible):g}"
+                 + (" on the visible tests" if held else seconds))
+    if held:   # the time too counts the hidden tests
+        lines.append(f"total with the hidden tests: {result.score:g} / {result.max_score:g}{seconds} "
+                     "(a student sees it once grades are published)")
     if result.isolation:
         lines.append(f"isolation: {result.isolation}")
     if result.hidden_not_run.get("count"):

@@ -294,11 +294,13 @@ def _grade_tests(out: GradeResult, tests: list[Test], probes: Any, reference: Re
 
 def _edge_cases_need_the_main_tests(results: list[TestResult]) -> list[TestResult]:
     """An edge case whose right answer is to do nothing (max_edge 0 keeps the quads) earns its points only
-    when some other test of its task earns points: a submission that does nothing earns nothing."""
-    earning = {r.test.task for r in results if not r.test.edge_case and r.score > 0}
+    when some other test of its task earns points: a submission that does nothing earns nothing. A visible
+    edge case looks at visible tests only, so its score says nothing about a hidden one."""
+    earning = {(r.test.task, r.test.hidden) for r in results if not r.test.edge_case and r.score > 0}
     out = []
     for r in results:
-        if r.test.edge_case and r.score > 0 and r.test.task not in earning:
+        seen = {(r.test.task, False)} | ({(r.test.task, True)} if r.test.hidden else set())
+        if r.test.edge_case and r.score > 0 and not seen & earning:
             r = TestResult(r.test, 0.0, Verdict(0.0, f"{r.verdict.message}; but this edge case counts only once another "
                                                      f"{r.test.task} test passes"), r.output, r.seconds)
         out.append(r)
@@ -307,15 +309,16 @@ def _edge_cases_need_the_main_tests(results: list[TestResult]) -> list[TestResul
 
 def _name_failing_dependencies(stage: str, results: list[TestResult]) -> list[TestResult]:
     """A test that lost points and runs the submission's own earlier functions (``depends_on``) says so, and
-    which of those lose points in their own tests here: fix those first (the test may be right then)."""
-    losing = {r.test.task for r in results if r.score < r.test.points}
+    which of those lose points in their own tests here: fix those first (the test may be right then). A visible
+    test's note counts visible tests only, so it says nothing about a hidden one."""
+    losing = {(r.test.task, r.test.hidden) for r in results if r.score < r.test.points}
     spec = get_stage(stage)
     out = []
     for r in results:
         deps = [d for d in r.test.depends_on if d != r.test.task]
         if deps and r.score < r.test.points:
             names = [f"{d} {spec.task(d).function}()" for d in deps]
-            failing = [n for d, n in zip(deps, names) if d in losing]
+            failing = [n for d, n in zip(deps, names) if (d, False) in losing or (r.test.hidden and (d, True) in losing)]
             if failing:
                 note = (f"; this test relies on your own {_and(names)}, and {_and(failing)} "
                         f"{'loses' if len(failing) == 1 else 'lose'} points in {'its' if len(failing) == 1 else 'their'} "

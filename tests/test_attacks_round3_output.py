@@ -1,0 +1,179 @@
+"""Hostile submissions against what grading shows (issue 34, round three): what a student sees, and what the
+grader holds while it reads an answer.
+
+- A one-bit oracle on hidden tests: two submissions that differ only in whether they pass a hidden test must
+  get the same visible results (messages, scores, dependency notes, totals, times), in every layout a student
+  sees before grades are published.
+
+Submissions are built at run time in a temporary folder; those that must fail a hidden case recognise it by
+its own arguments (taken from ``hidden.py`` here), so the attack holds whatever cases the public tests use.
+"""
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from cs451 import KIT_ROOT
+from cs451.grading import sandbox
+from cs451.grading.loader import load_tests
+from cs451.grading.report import render_report
+from cs451.grading.results import format_table, to_gradescope, total_score
+from cs451.grading.runner import grade
+
+from conftest import world_readable_dir
+from test_packaging import run_autograder
+
+pytestmark = pytest.mark.skipif(not sandbox.is_root(), reason="the attacks are graded as a root grader grades them")
+
+
+def _params(stage: str, number: str) -> dict:
+    return next(t.params for t in load_tests(stage) if t.number == number)
+
+
+def _package(root: Path, stage: str, tail: str) -> Path:
+    """The reference's package of ``stage`` with ``tail`` appended to its ``__init__.py``, readable by the sandbox."""
+    shutil.copytree(KIT_ROOT / "reference" / stage, root / stage, ignore=shutil.ignore_patterns("__pycache__"))
+    init = root / stage / "__init__.py"
+    init.write_text(init.read_text() + tail)
+    for path in [root, *root.rglob("*")]:
+        path.chmod(0o755 if path.is_dir() else 0o644)
+    return root
+
+
+def seen_before_publication(data: dict) -> dict:
+    """What a student sees of a results.json before grades are published: all but the tests not yet visible."""
+    return {**{k: v for k, v in data.items() if k != "tests"},
+            "tests": [t for t in data["tests"] if t.get("visibility", "visible") == "visible"]}
+
+
+def table_without_hidden_rows(table: str) -> str:
+    """``cs451 grade``'s table less the hidden tests' rows (with their messages) and the line that counts them."""
+    kept, skipping = [], False
+    for line in table.splitlines():
+        if line.startswith(" "):
+            if not skipping:
+                kept.append(line)
+            continue
+        skipping = "[hidden]" in line or line.startswith("total with the hidden tests")
+        if not skipping:
+            kept.append(line)
+    return "\n".join(kept)
+
+
+# --- item 4: a one-bit oracle on hidden tests ----------------------------------------------------------
+
+RADIOSITY_ORACLE = '''
+
+import numpy as _np
+from .patches import subdivide as _right_subdivide
+from .shooting import shoot as _right_shoot
+
+_HIDDEN_SHOT = {shot}
+_HIDDEN_GRID = {grid}
+_PASS_HIDDEN_SHOT = {pass_shot}
+_PASS_HIDDEN_GRID = {pass_grid}
+
+
+def _same(a, b):
+    a, b = _np.asarray(a, float), _np.asarray(b, float)
+    return a.shape == b.shape and _np.allclose(a, b)
+
+
+def shoot(i, row, areas, reflectance, radiosity, unshot):
+    """Right, except on the hidden case when told to fail it."""
+    B, dB = _right_shoot(i, row, areas, reflectance, radiosity, unshot)
+    hidden = i == _HIDDEN_SHOT["i"] and _same(areas, _HIDDEN_SHOT["areas"])
+    return (B if _PASS_HIDDEN_SHOT or not hidden else _np.zeros_like(B)), dB
+
+
+def subdivide(quads, max_edge):
+    """Right where the answer is to do nothing (the edge case) and on the hidden case when told; else nothing."""
+    hidden = max_edge == _HIDDEN_GRID["max_edge"] and _same(quads, _HIDDEN_GRID["quads"])
+    if max_edge <= 0 or (hidden and _PASS_HIDDEN_GRID):
+        return _right_subdivide(quads, max_edge)
+    q = _np.asarray(quads, float)
+    return q.copy(), _np.arange(len(q))
+
+
+def progressive_refinement(row, areas, reflectance, emission, tolerance, max_shots, overshoot, on_shot):
+    """Wrong everywhere: its failing tests name R2 shoot(), which they rely on."""
+    E = _np.array(emission, float)
+    return E, _np.zeros_like(E), []
+'''
+
+
+def radiosity_oracle(root: Path, pass_hidden_shot: bool, pass_hidden_grid: bool) -> Path:
+    """A radiosity submission whose hidden R2.3 (a shot) and R1.5 (a grid) pass or fail as asked; nothing else differs."""
+    shot, grid = _params("radiosity", "R2.3"), _params("radiosity", "R1.5")
+    return _package(root, "radiosity", RADIOSITY_ORACLE.format(
+        shot=json.dumps({"i": shot["i"], "areas": shot["areas"]}),
+        grid=json.dumps({"max_edge": grid["max_edge"], "quads": grid["quads"]}),
+        pass_shot=pass_hidden_shot, pass_grid=pass_hidden_grid))
+
+
+def test01_a_hidden_result_changes_nothing_a_student_sees_in_any_local_output():
+    """R2.3 failing on purpose once added "R2 shoot() loses points in its own tests" to every visible R3 test and
+    moved the top-level score 15 -> 12.5; R1.5 passing once gave visible edge case R1.3 its point."""
+    top = world_readable_dir("cs451-oracle-")
+    try:
+        graded = []
+        for shot, grid in ((True, False), (False, True)):    # one folder, so the reports name the same submission
+            shutil.rmtree(top / "sub", ignore_errors=True)
+            graded.append(grade("radiosity", radiosity_oracle(top / "sub", shot, grid), show_progress=False,
+                                tasks=["R1", "R2", "R3"]))
+        a, b = graded
+        hidden = {r.test.number: (ra.score, r.score) for ra, r in zip(a.results, b.results) if r.test.hidden}
+        assert hidden["R2.3"][0] > hidden["R2.3"][1] and hidden["R1.5"][0] < hidden["R1.5"][1], hidden
+        assert total_score(to_gradescope(a)) != total_score(to_gradescope(b))     # the grade itself does differ
+        assert seen_before_publication(to_gradescope(a)) == seen_before_publication(to_gradescope(b))
+        assert render_report(a, show_hidden=False) == render_report(b, show_hidden=False)
+        assert table_without_hidden_rows(format_table(a)) == table_without_hidden_rows(format_table(b))
+        visible_r3 = [r.verdict.message for r in b.results if r.test.task == "R3" and not r.test.hidden]
+        assert visible_r3 and all("relies on your own R2 shoot()" in m and "loses points" not in m for m in visible_r3)
+        hidden_r3 = [r.verdict.message for r in b.results if r.test.task == "R3" and r.test.hidden]
+        assert all("R2 shoot() loses points in its own tests" in m for m in hidden_r3), hidden_r3   # shown once published
+        r13 = next(r for r in b.results if r.test.number == "R1.3")
+        assert r13.score == 0 and "counts only once another R1 test passes" in r13.verdict.message
+    finally:
+        shutil.rmtree(top, ignore_errors=True)
+
+
+SPHERE_ORACLE = '''
+
+_right_perspective = perspective
+_HIDDEN = {hidden}
+
+
+def perspective(fovy, aspect, near, far):
+    """Right, except on the hidden case's own arguments when told to fail it."""
+    import numpy as np
+    m = _right_perspective(fovy, aspect, near, far)
+    return m * 0 if {fail} and [fovy, aspect, near, far] == _HIDDEN else m
+'''
+
+
+def sphere_oracle(root: Path, fail_hidden: bool) -> Path:
+    p = _params("sphere", "S1.3")
+    return _package(root, "sphere", SPHERE_ORACLE.format(
+        hidden=[p["fovy"], p["aspect"], p["near"], p["far"]], fail=fail_hidden))
+
+
+@pytest.mark.parametrize("mode", ["bubblewrap", "uid"])
+def test02_on_gradescope_the_top_level_shows_nothing_of_a_hidden_result(gradescope, mode):
+    """The zip's results.json once said 100 or 96.67 by whether hidden S1.3 passed; now it has no top-level score
+    while hidden tests are in it, so Gradescope adds up the tests' scores (hidden ones once published)."""
+    top = world_readable_dir("cs451-oracle-gs-")
+    root, env = gradescope
+    try:
+        runs = [run_autograder((root, {**env, "CS451_SANDBOX": mode}), sphere_oracle(top / str(fail), fail), "--tasks", "S1,S2")
+                for fail in (False, True)]
+        points = sum(t.points for t in load_tests("sphere") if t.task in ("S1", "S2"))
+        s13 = next(t.points for t in load_tests("sphere") if t.number == "S1.3")
+        assert [total_score(r) for r in runs] == [pytest.approx(points), pytest.approx(points - s13)]
+        assert all("score" not in r and "execution_time" not in r for r in runs)
+        assert seen_before_publication(runs[0]) == seen_before_publication(runs[1])
+    finally:
+        shutil.rmtree(top, ignore_errors=True)
