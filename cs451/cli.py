@@ -61,7 +61,8 @@ def _cmd_grade(a: argparse.Namespace) -> int:
     except BaseException as err:  # a results file is always written, with the reason, before we fail
         if a.results:
             write_failure(a.results, f"{type(err).__name__}: {err}")
-            print(f"wrote {a.results} (grading failed: {err})", file=sys.stderr)
+            from .grading.untrusted import printable
+            print(printable(f"wrote {a.results} (grading failed: {err})", lines=False), file=sys.stderr)
         raise
     print(format_table(result))
     if a.results:
@@ -180,11 +181,13 @@ def _cmd_passed(a: argparse.Namespace) -> int:
         tests = json.loads(Path(a.results).read_text())["tests"]
     except (OSError, ValueError, KeyError, TypeError) as err:
         raise KitError(f"{a.results}: not a results file ({err})") from None
+    from .grading.untrusted import printable
     mine = [t for t in tests if a.task in t.get("tags", [])]
-    for t in mine:
-        print(f"{t['number']} {t['status']:6} {t['score']:g}/{t['max_score']:g}  {t['name']}")
+    for t in mine:   # the Classroom step's output: the submission's text made printable
+        line = f"{t['number']} {t['status']:6} {t['score']:g}/{t['max_score']:g}  {t['name']}"
+        print(printable(line, lines=False))
         if t["status"] != "passed":
-            print(f"        {t['output'].splitlines()[0] if t['output'] else ''}")
+            print(f"        {printable(t['output'].splitlines()[0] if t['output'] else '', lines=False)}")
     if not mine:
         print(f"no tests of task {a.task} in {a.results}")
         return 1
@@ -362,8 +365,9 @@ def main(argv: list[str] | None = None) -> int:
     set_verbose(getattr(args, "verbose", False))
     try:
         return args.func(args)
-    except KitError as err:
-        print(f"cs451: error: {err}", file=sys.stderr)
+    except KitError as err:   # it may quote a submission (its file names): made printable
+        from .grading.untrusted import printable
+        print(printable(f"cs451: error: {err}"), file=sys.stderr)
         return 2
     except MemoryError:
         print("cs451: error: out of memory (the job's estimate missed it: please report the command)", file=sys.stderr)

@@ -4,14 +4,24 @@ grader holds while it reads an answer.
 - A one-bit oracle on hidden tests: two submissions that differ only in whether they pass a hidden test must
   get the same visible results (messages, scores, dependency notes, totals, times), in every layout a student
   sees before grades are published.
+- Control characters: what a submission prints, raises, answers or names reaches no terminal, gradebook,
+  results.json, report or Classroom step as raw escape sequences, bidi overrides or other controls; it is
+  shown escaped (``\x1b``), in every layout.
 
 Submissions are built at run time in a temporary folder; those that must fail a hidden case recognise it by
 its own arguments (taken from ``hidden.py`` here), so the attack holds whatever cases the public tests use.
 """
 from __future__ import annotations
 
+import csv
+import io
 import json
+import os
+import re
 import shutil
+import subprocess
+import sys
+import unicodedata
 from pathlib import Path
 
 import pytest
@@ -21,9 +31,12 @@ from cs451.grading import sandbox
 from cs451.grading.loader import load_tests
 from cs451.grading.report import render_report
 from cs451.grading.results import format_table, to_gradescope, total_score
+from cs451.grading.roster import grade_roster
 from cs451.grading.runner import grade
+from cs451.packaging.release import build_release
 
 from conftest import world_readable_dir
+from test_attacks import attack
 from test_packaging import run_autograder
 
 pytestmark = pytest.mark.skipif(not sandbox.is_root(), reason="the attacks are graded as a root grader grades them")
@@ -177,3 +190,131 @@ def test02_on_gradescope_the_top_level_shows_nothing_of_a_hidden_result(gradesco
         assert seen_before_publication(runs[0]) == seen_before_publication(runs[1])
     finally:
         shutil.rmtree(top, ignore_errors=True)
+
+
+# --- item 6: control characters ------------------------------------------------------------------------
+
+#: Clear the screen, retitle the terminal, reverse the text's direction, a C1 CSI, a carriage return.
+HOSTILE = "\x1b[2J\x1b]0;owned\x07\u202e\x9b\r"
+UNSAFE = {"Cc", "Cf", "Cs", "Zl", "Zp"}
+
+
+def unsafe(text: str) -> list[str]:
+    """The control, bidi and other invisible characters in ``text`` (newlines and tabs allowed; CSV's CRLF too)."""
+    return sorted({c for c in text.replace("\r\n", "\n") if unicodedata.category(c) in UNSAFE and c not in "\n\t"})
+
+
+def strings_in(data) -> str:
+    """Every string of a decoded JSON document, joined: what a page shows once it has parsed the file."""
+    if isinstance(data, dict):
+        return "\n".join(strings_in(k) + "\n" + strings_in(v) for k, v in data.items())
+    if isinstance(data, list):
+        return "\n".join(strings_in(v) for v in data)
+    return data if isinstance(data, str) else ""
+
+
+def escapes_everywhere(root: Path, name: str) -> Path:
+    """S1 prints and raises text full of escape sequences, the interface answer names a problem made of them, and
+    the upload holds a link whose name carries them (the copy leaves it out and says so)."""
+    forged = ("import json as _j, os as _o\n"
+              "if _j.load(open('request.json'))['probe'] == '__interface__':\n"
+              f"    np.savez('output.npz', problems=np.array(['PROBLEM' + {HOSTILE!r}]))\n"
+              "    open('status.json', 'w').write('{\"ok\": true}')\n    _o._exit(0)\n")
+    code = f"    print('PRINTED' + {HOSTILE!r})\n    raise ValueError('RAISED' + {HOSTILE!r})\n"
+    folder = attack(root, name, code, at_import=forged)
+    (folder / "sphere" / f"link{HOSTILE}").symlink_to("/etc/hostname")
+    return folder
+
+
+def assert_printable(where: str, text: str, *markers: str) -> None:
+    assert not unsafe(text), f"{where}: {[hex(ord(c)) for c in unsafe(text)]}"
+    for marker in markers:   # the text is still there, escaped: nothing a student wrote is silently lost
+        assert f"{marker}\\x1b[2J\\x1b]0;owned\\x07\\u202e\\x9b" in text, f"{where}: {marker} not shown escaped"
+
+
+def test03_escape_sequences_reach_no_terminal_file_or_page_of_the_kit(tmp_path):
+    """`cs451 grade` from this kit: its table on the terminal, its results.json and its report."""
+    top = world_readable_dir("cs451-escapes-")
+    try:
+        sub = escapes_everywhere(top, "sub")
+        done = subprocess.run([sys.executable, "-m", "cs451", "grade", "sphere", "--submission", str(sub), "--tasks",
+                               "S1,S2", "--results", str(tmp_path / "results.json"), "--report", str(tmp_path / "report")],
+                              cwd=KIT_ROOT, capture_output=True, text=True, timeout=300)
+        assert done.returncode == 0, done.stderr[-2000:]
+        assert_printable("terminal", done.stdout + done.stderr, "RAISED", "PROBLEM", "link")
+        data = json.loads((tmp_path / "results.json").read_text())
+        assert_printable("results.json", strings_in(data), "RAISED", "PRINTED", "PROBLEM", "link")
+        assert_printable("report.html", (tmp_path / "report" / "report.html").read_text(), "RAISED", "PRINTED", "PROBLEM")
+    finally:
+        shutil.rmtree(top, ignore_errors=True)
+
+
+def test04_escape_sequences_reach_no_gradebook_and_no_report_of_a_roster(tmp_path):
+    """A roster whose student folder's own name carries them too."""
+    top = world_readable_dir("cs451-escapes-")
+    try:
+        escapes_everywhere(top / "class", f"mallory{HOSTILE}")
+        grade_roster(stage="sphere", roster=top / "class", output=tmp_path / "grades", show_progress=False, only=["S1", "S2"])
+        book = (tmp_path / "grades" / "gradebook.csv").read_text()
+        assert_printable("gradebook.csv", book, "mallory", "PROBLEM")
+        row = next(csv.DictReader(io.StringIO(book)))
+        assert float(row["score"]) == 10 and float(row["S2"]) == 10, row   # S1 raised; S2 is the control
+        student = tmp_path / "grades" / f"mallory{HOSTILE}"
+        assert_printable("results.json", strings_in(json.loads((student / "results.json").read_text())), "RAISED", "PRINTED")
+        assert_printable("report.html", (student / "report.html").read_text(), "RAISED", "PRINTED", "PROBLEM")
+    finally:
+        shutil.rmtree(top, ignore_errors=True)
+
+
+@pytest.mark.parametrize("mode", ["bubblewrap", pytest.param("uid", marks=pytest.mark.slow)])
+def test05_escape_sequences_reach_no_gradescope_results(gradescope, mode):
+    """The zip's run_autograder, in the layout its own setup.sh makes."""
+    top = world_readable_dir("cs451-escapes-")
+    root, env = gradescope
+    try:
+        data = run_autograder((root, {**env, "CS451_SANDBOX": mode}), escapes_everywhere(top, "sub"), "--tasks", "S1,S2")
+        assert_printable("results.json", strings_in(data), "RAISED", "PRINTED", "PROBLEM", "link")
+        assert total_score(data) == 10
+    finally:
+        shutil.rmtree(top, ignore_errors=True)
+
+
+def test06_escape_sequences_reach_no_classroom_step_output():
+    """The student release's workflow, its grading and per-task commands run as written (the kit's Python in place
+    of the release's set-up .venv): what each step prints, and the results and report it keeps."""
+    top = world_readable_dir("cs451-escapes-")
+    try:
+        release = build_release("sphere", top / "repo")
+        shutil.rmtree(release / "sphere")
+        shutil.copytree(escapes_everywhere(top, "sub") / "sphere", release / "sphere", symlinks=True)
+        for path in [top, *top.rglob("*")]:
+            if not path.is_symlink():
+                path.chmod(0o755 if path.is_dir() else 0o644)
+        commands = re.findall(r"^\s+(?:run|command): (.+)$", (release / ".github" / "workflows" / "classroom.yml").read_text(),
+                              flags=re.M)
+        assert commands[0] == "./setup.sh" and all(c.startswith(".venv/bin/cs451 ") for c in commands[1:])
+        printed = []
+        for command in commands[1:]:
+            args = [sys.executable, "-m", "cs451", *command.split()[1:]]
+            done = subprocess.run(args, cwd=release, capture_output=True, text=True, timeout=600,
+                                  env={"PATH": os.environ["PATH"], "HOME": str(top)})
+            printed.append(done.stdout + done.stderr)
+            assert done.returncode in (0, 1), done.stderr[-2000:]
+        assert_printable("the workflow's steps", "\n".join(printed), "RAISED", "PROBLEM", "link")
+        assert_printable("results.json", strings_in(json.loads((release / "results.json").read_text())), "RAISED", "PRINTED")
+        assert_printable("report.html", (release / "report" / "report.html").read_text(), "RAISED", "PRINTED", "PROBLEM")
+    finally:
+        shutil.rmtree(top, ignore_errors=True)
+
+
+def test07_printable_escapes_what_a_terminal_obeys_or_hides_and_keeps_the_rest():
+    """The one function every output goes through: invisible and steering characters become their escapes;
+    the kit's own symbols and any language's letters stay as they are."""
+    from cs451.grading.untrusted import printable
+    kept = "ꟻLIP × ≤ ─ ✓ é 日本 مرحبا"
+    assert printable(kept) == kept and printable("a\tb\nc") == "a\tb\nc"
+    assert printable("a\tb\nc", lines=False) == "a\\tb\\nc"
+    assert printable("\x1b[31m\x07\x7f\x9b\r") == "\\x1b[31m\\x07\\x7f\\x9b\\x0d"
+    assert printable("\u202e\u2066\u200b\ufeff\u2028") == "\\u202e\\u2066\\u200b\\ufeff\\u2028"
+    assert printable("\ud800\U000e0041") == "\\ud800\\U000e0041"    # a lone surrogate; an invisible tag letter
+    assert not unsafe(printable("".join(map(chr, range(0x2100)))))

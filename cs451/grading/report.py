@@ -18,6 +18,7 @@ from PIL import Image as PILImage
 
 from ..compare import flip_error
 from .runner import GradeResult
+from .untrusted import printable
 
 CAPTIONS = {"reference": "reference (as <code>cs451 render</code> writes it)",
             "submission": "yours (as <code>cs451 render</code> writes it)",
@@ -85,9 +86,9 @@ def figures(images: dict[str, np.ndarray]) -> list[dict]:
 
 def _row(r) -> dict:
     status, word = _status(r)
-    return {"number": r.test.number, "name": r.test.name, "score": r.score, "points": r.test.points,
+    return {"number": r.test.number, "name": printable(r.test.name), "score": r.score, "points": r.test.points,
             "status": status, "word": word, "hidden": r.test.hidden, "tolerance": r.test.tolerance,
-            "message": r.verdict.message, "output": r.output.strip() and r.output}
+            "message": printable(r.verdict.message), "output": r.output.strip() and printable(r.output)}
 
 
 def render_report(result: GradeResult, show_hidden: bool = True) -> str:
@@ -101,11 +102,11 @@ def render_report(result: GradeResult, show_hidden: bool = True) -> str:
     held = [r for r in shown if r.test.hidden]
     held_back = not show_hidden and any(r.test.hidden for r in result.results)   # its time counts the hidden tests
     return _env.get_template("report.html.j2").render(
-        stage=result.stage, submission=str(result.submission),
-        seconds=None if held_back else result.seconds, isolation=result.isolation,
+        stage=result.stage, submission=printable(result.submission, lines=False),
+        seconds=None if held_back else result.seconds, isolation=printable(result.isolation),
         score=sum(r.score for r in visible), total=sum(r.test.points for r in visible),
         hidden_score=sum(r.score for r in held), hidden_total=sum(r.test.points for r in held),
-        hidden_note=hidden_note(result, show_hidden), problems=result.problems,
+        hidden_note=hidden_note(result, show_hidden), problems=[printable(p) for p in result.problems],
         rows=[_row(r) for r in shown],
         failed=failed, passed=passed)
 

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from .runner import GradeResult
+from .untrusted import printable
 
 
 def to_gradescope(result: GradeResult) -> dict[str, Any]:
@@ -30,7 +31,7 @@ def to_gradescope(result: GradeResult) -> dict[str, Any]:
         if r.output.strip():
             output += "\n\nYour code printed:\n" + r.output.strip()[:MAX_PRINTED]
         tests.append({"score": r.score, "max_score": t.points, "status": "passed" if r.verdict.passed else "failed",
-                      "name": t.name, "number": t.number, "output": output,
+                      "name": printable(t.name, lines=False), "number": t.number, "output": printable(output),
                       "output_format": "text",
                       "tags": [t.task], "visibility": t.visibility})
     data: dict[str, Any] = {"output": _summary_html(result), "output_format": "html",
@@ -56,7 +57,8 @@ THUMBNAIL = 160
 def _summary_html(result: GradeResult) -> str:
     from PIL import Image as PILImage
     from .report import _png_data_uri, hidden_note
-    esc = html.escape
+    def esc(text: object) -> str:
+        return html.escape(printable(text))
     visible = [r for r in result.results if not r.test.hidden]
     score, total = sum(r.score for r in visible), sum(r.test.points for r in visible)
     parts = [f"<p><b>{score:g} / {total:g} points</b> on the tests you can see now.</p>"]
@@ -98,9 +100,9 @@ def format_table(result: GradeResult, width: int = 100) -> str:
         t = r.test
         mark = "ok" if r.verdict.passed else ("part" if r.score > 0 else "FAIL")
         hidden = " [hidden]" if t.hidden else ""
-        lines.append(f"{t.number:<7} {r.score:>5g} / {t.points:<3g}  {mark:4} {t.name}{hidden}")
+        lines.append(f"{t.number:<7} {r.score:>5g} / {t.points:<3g}  {mark:4} {printable(t.name, lines=False)}{hidden}")
         if not r.verdict.passed:
-            lines += textwrap.wrap(r.verdict.message, width, initial_indent=indent,
+            lines += textwrap.wrap(printable(r.verdict.message, lines=False), width, initial_indent=indent,
                                    subsequent_indent=indent, break_long_words=True, break_on_hyphens=False)
     lines.append("-" * width)
     visible = [r for r in result.results if not r.test.hidden]
@@ -119,13 +121,13 @@ def format_table(result: GradeResult, width: int = 100) -> str:
         lines.append(f"total with the hidden tests: {result.score:g} / {result.max_score:g}{seconds} "
                      "(a student sees it once grades are published)")
     if result.isolation:
-        lines.append(f"isolation: {result.isolation}")
+        lines.append(f"isolation: {printable(result.isolation, lines=False)}")
     if result.hidden_not_run.get("count"):
         from .report import hidden_note
         lines.append(f"not run here: {hidden_note(result)}")
     for p in result.problems:
-        lines.append(f"problem: {p}")
-    return "\n".join(lines)
+        lines.append(f"problem: {printable(p, lines=False)}")
+    return printable("\n".join(lines))
 
 
 def write_failure(path: str | Path, reason: str, blame_submission: bool = False) -> Path:
@@ -135,6 +137,7 @@ def write_failure(path: str | Path, reason: str, blame_submission: bool = False)
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    reason = printable(reason)
     if blame_submission:
         text = f"Your submission could not be graded: {reason}"
     else:

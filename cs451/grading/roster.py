@@ -20,6 +20,7 @@ from ..stages import get_stage
 from .report import write_report
 from .results import write_failure, write_results
 from .runner import GradeResult, grade
+from .untrusted import printable
 
 
 def find_submissions(roster: Path) -> list[Path]:
@@ -71,11 +72,13 @@ def grade_roster(*, stage: str, roster: str | Path, output: str | Path, include_
     return path
 
 
-def spreadsheet_safe(value):
-    """A cell a spreadsheet shows as text: a leading = + - @ (a formula) is quoted with an apostrophe."""
-    if isinstance(value, str) and value[:1] in ("=", "+", "-", "@", "\t", "\r"):
-        return "'" + value
-    return value
+def spreadsheet_safe(value: object) -> object:
+    """A cell a spreadsheet shows as text, on one line: control and bidi characters escaped (``printable``), and a
+    leading = + - @ (a formula) quoted with an apostrophe."""
+    if not isinstance(value, str):
+        return value
+    value = printable(value, lines=False)
+    return "'" + value if value[:1] in ("=", "+", "-", "@") else value
 
 
 def _namespaces_available() -> bool:

@@ -14,8 +14,10 @@ from __future__ import annotations
 import io
 import json
 import os
+import re
 import signal
 import stat
+import unicodedata
 import zipfile
 from pathlib import Path
 
@@ -120,6 +122,28 @@ def read_arrays(path: Path) -> dict[str, np.ndarray]:
         array = np.frombuffer(raw, dtype=dtype).reshape(shape, order="F" if fortran else "C")
         out[name] = array.copy()  # writable and owned
     return out
+
+
+_SUSPECT = re.compile("[^\n\t\x20-\x7e]")
+_UNSAFE = {"Cc", "Cf", "Cs", "Zl", "Zp"}   # controls, format (bidi, zero-width), lone surrogates, line separators
+
+
+def _escape(match: re.Match) -> str:
+    c = match.group()
+    if unicodedata.category(c) not in _UNSAFE:
+        return c
+    code = ord(c)
+    return f"\\x{code:02x}" if code < 0x100 else f"\\u{code:04x}" if code < 0x10000 else f"\\U{code:08x}"
+
+
+def printable(text: object, lines: bool = True) -> str:
+    """``text`` safe for a terminal, CSV, JSON or HTML: every control, bidi or other invisible format character
+    (C0, DEL, C1 and so ESC, U+202E, U+200B, lone surrogates, U+2028) written out as its escape, ``\\x1b``.
+    Newlines and tabs stay when ``lines``; else they are escaped too (a one-line cell or name)."""
+    text = str(text)
+    if not lines:
+        text = text.replace("\t", "\\t").replace("\n", "\\n")
+    return _SUSPECT.sub(_escape, text)
 
 
 def signal_name(returncode: int | None) -> str | None:
