@@ -7,7 +7,9 @@ checkout. They go to a folder ``cs451_kit`` beside ``cs451`` in site-packages (n
 which the grader copies into every sandbox). Such a wheel holds the reference solutions and the hidden
 tests: it is the instructor's and is never published (README, "Installing").
 
-The build runs in a temporary folder, so ``pip install .`` leaves no ``build/`` in the checkout.
+The build runs in a private temporary folder (``tempfile.mkdtemp``: mode 0700, a fresh name), removed when
+``setup()`` returns, so ``pip install .`` leaves no ``build/`` in the checkout and no readable copy of the kit
+in ``/tmp`` (the uid-only sandbox cannot hide one, and its canary refuses to grade where it finds one).
 """
 from __future__ import annotations
 
@@ -42,6 +44,9 @@ class build_py_with_kit(build_py):
         (target / "KIT").write_text("the cs451 kit installed beside its engine; see cs451/__init__.py\n")
 
 
-BUILD = Path(tempfile.gettempdir()) / "cs451-kit-build"
-setup(cmdclass={"build_py": build_py_with_kit},
-      options={"build": {"build_base": str(BUILD)}, "bdist_wheel": {"bdist_dir": str(BUILD / "wheel")}})
+BUILD = Path(tempfile.mkdtemp(prefix="cs451-kit-build-"))
+try:
+    setup(cmdclass={"build_py": build_py_with_kit},
+          options={"build": {"build_base": str(BUILD)}, "bdist_wheel": {"bdist_dir": str(BUILD / "wheel")}})
+finally:
+    shutil.rmtree(BUILD, ignore_errors=True)

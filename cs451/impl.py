@@ -41,7 +41,8 @@ def earlier_stage_impl(stage: str) -> Path:
 
     The kit's reference where this copy has it (the instructor's kit, or a student copy released with
     ``--include-reference``); in a student copy without it, the student's own package of that stage,
-    copied beside this one. Student code of the current stage never gets here.
+    copied beside this one. Student code of the current stage never gets here, and no grading worker
+    does: a sandbox holds the engine alone, and the tests pass the earlier stage's results in as arrays.
     """
     for root in (KIT_ROOT / "reference", KIT_ROOT):
         if (root / stage / "__init__.py").is_file():

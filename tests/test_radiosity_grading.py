@@ -44,7 +44,7 @@ def reference_grade(reference_grade_of):
      "return (unshot * areas[:, None]).sum(axis=0) / total", {"R4"}),
     ("display.py", "return positions, sums / counts[:, None], inverse.astype(np.int64)",
      "return positions, sums / 4.0, inverse.astype(np.int64)", {"R5"}),
-    ("shooting.py", "received = reflectance * (row * (areas[i] / areas))[:, None]", "received = reflectance * row[:, None]",
+    ("shooting.py", "received = np.outer(row * (areas[i] / areas), delta)", "received = np.outer(row, delta)",
      {"R2", "R3"}),
 ])
 def test04_one_broken_function_loses_its_task_and_what_calls_it(make_submission, file, old, new, lost):

@@ -56,7 +56,8 @@ PROCESS_ALLOWANCE = 64         # processes and threads a test may run (llvmpipe 
 OUTPUT_LIMIT = 4000            # characters of printed output kept
 CLONE_NEWNET = 0x40000000
 UID_RANGE = (2_000_000_000, 2_100_000_000)   # throwaway uids: far above any real account
-CANARY_SECONDS = 30.0
+CANARY_SECONDS = 90.0          # the canary's whole run
+CANARY_SEARCH_SECONDS = 60.0   # its search of everything the sandbox user can read
 
 #: How each mode is described in results and reports.
 DESCRIPTIONS = {
@@ -454,31 +455,18 @@ class Sandbox:
         return self._canary()
 
     def _canary(self) -> str | None:
-        """Run a tiny program exactly as a test would; it must see no protected path and change nothing it is given."""
-        script = ("import json, os, sys\n"
-                  "paths = json.loads(sys.argv[1])\n"
-                  "seen = []\n"
-                  "for p in paths:\n"
-                  "    try:\n"
-                  "        os.listdir(p) if os.path.isdir(p) else open(p, 'rb').close()\n"
-                  "        seen.append(p)\n"
-                  "    except OSError:\n"
-                  "        pass\n"
-                  "wrote = []\n"
-                  "for p in [sys.argv[2]] + json.loads(sys.argv[3]):\n"
-                  "    try:\n"
-                  "        open(os.path.join(p, 'cs451-canary'), 'x').close()\n"
-                  "        wrote.append(p)\n"
-                  "    except OSError:\n"
-                  "        pass\n"
-                  "import cs451\n"
-                  "print(json.dumps({'seen': seen, 'wrote': wrote, 'uid': os.getuid()}))\n")
-        paths = [str(p) for p in self.protected if os.path.lexists(p)]
-        folders = [str(p) for p in self.unwritable if os.path.isdir(p)]
+        """Run :mod:`.canary` exactly as a test would: it must see no protected path and no copy of the kit's
+        reference or answers anywhere it can read, and change nothing it is given."""
+        from ..stages import stage_names
         job = self._new_job()
+        given = [f"{self.visible_engine}/{below}" for _, below in self.engine_sources if below != "cs451"]
+        spec = {"protected": [str(p) for p in self.protected if os.path.lexists(p)],
+                "unwritable": [self.visible_upload] + [str(p) for p in self.unwritable if os.path.isdir(p)],
+                "exempt": [self.visible_upload, self.visible_job(job), str(Path(self.upload).absolute()), *given],
+                "stages": stage_names(),
+                "student_copy": self.student_copy, "seconds": CANARY_SEARCH_SECONDS}
         try:
-            done = self.run(["-c", script, json.dumps(paths), self.visible_upload, json.dumps(folders)], job,
-                            Limits(wall_seconds=CANARY_SECONDS))
+            done = self.run(["-m", "cs451.grading.canary", json.dumps(spec)], job, Limits(wall_seconds=CANARY_SECONDS))
         except OSError as err:
             return f"could not start ({err})"
         finally:
@@ -494,6 +482,13 @@ class Sandbox:
             for folder in answer["wrote"][1:]:
                 (Path(folder) / "cs451-canary").unlink(missing_ok=True)
             return f"the sandbox user can write in {answer['wrote'][0]}"
+        if answer["found"]:
+            return (f"the sandbox user can read a copy of the kit's reference or answers: "
+                    f"{'; '.join(answer['found'][:3])}{' and more' if len(answer['found']) > 3 else ''}; remove it or "
+                    f"make it private (mode 0700){'' if self.mode == 'bubblewrap' else ', or install bubblewrap'}")
+        if not answer["complete"]:
+            return (f"the canary could not search everything the sandbox user can read in {CANARY_SEARCH_SECONDS:g} s "
+                    f"({answer['entries']} entries); install bubblewrap, which shows it far less")
         if is_root() and answer["uid"] == 0:
             return "the worker would run as root"
         return None

@@ -90,7 +90,11 @@ def build_gradescope(stage: str, output: str | Path) -> Path:
                     "time_budget_s": GRADESCOPE_BUDGET}
         (root / "autograder.json").write_text(json.dumps(manifest, indent=2) + "\n")
         output.parent.mkdir(parents=True, exist_ok=True)
-        with zipfile.ZipFile(output, "w", zipfile.ZIP_DEFLATED) as zf:
+        # the zip holds the reference and the hidden tests: private to the instructor (a readable one in the kit's
+        # folder reached the uid-only sandbox), whatever the umask or an older file's mode
+        fd = os.open(output, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+        os.fchmod(fd, 0o600)
+        with os.fdopen(fd, "wb") as raw, zipfile.ZipFile(raw, "w", zipfile.ZIP_DEFLATED) as zf:
             for path in sorted(root.rglob("*")):
                 if path.is_file():
                     info = zipfile.ZipInfo.from_file(path, path.relative_to(root).as_posix())

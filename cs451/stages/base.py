@@ -70,7 +70,8 @@ class Stage:
     probes: dict[str, Callable[..., dict[str, np.ndarray]]] = field(default_factory=dict)
     #: demo(module, output: Path, window: bool, frames: int | None) -> list[Path] of files written (none in a window)
     demo: Callable[..., list] | None = None
-    #: earlier stages whose implementation this stage's engine runs (radiosity: the hemicube), see :meth:`trusted`
+    #: earlier stages whose implementation this stage's engine runs (radiosity: the hemicube), see :meth:`trusted`;
+    #: never in a grading sandbox, where the tests pass that stage's results in as arrays (``Test.given``)
     builds_on: tuple[str, ...] = ()
     #: the stage's record of ``options.<name>`` in a scene file (a dataclass of schema fields)
     options_type: type | None = None

@@ -23,6 +23,7 @@ from typing import Any, Callable, Iterator, Literal
 import numpy as np
 
 from .. import drawing, patching, schema, solvers
+from ..errors import KitError
 from .. import specular as glossy       # the module; `specular` is also an option below
 from ..patching import Patches
 from ..solvers import MatrixRows, Solution, solve_direct, shooting_matrix
@@ -279,9 +280,13 @@ def probe_shoot(impl: Any, i: int, F: list, areas: list, reflectance: list, radi
 
 
 def _system(params: dict, given: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    if "F" in given:
-        return (given["F"], given["areas"], given["reflectance"], given["emission"])
-    return tuple(np.asarray(params[k], dtype=np.float64) for k in ("F", "areas", "reflectance", "emission"))  # type: ignore[return-value]
+    """The system to shoot on, as data: a scene's trusted arrays (``given``, from ``probe_system`` on the reference),
+    else the parameters. A grading worker has no stage-3 code to compute form factors with."""
+    names = ("F", "areas", "reflectance", "emission")
+    source = given if "F" in given else params
+    if any(source.get(k) is None for k in names):
+        raise KitError("this test gives no form factors: a scene test takes the reference's 'system' as its trusted input")
+    return tuple(np.asarray(source[k], dtype=np.float64) for k in names)  # type: ignore[return-value]
 
 
 @PROBES.register
@@ -338,12 +343,15 @@ def probe_solved_system(impl: Any, scene: dict, size: list[int] | None = None, t
 def probe_render(impl: Any, scene: dict, size: list[int], tolerance: float = 1e-3, use_ambient: bool = True,
                  max_shots: int = 0, patch_size: float = 0.0, resolution: int = 64, **given: np.ndarray
                  ) -> dict[str, np.ndarray]:
-    """Draw ``scene`` on the trusted patches and form factors (``given``) with the submission's R5.
+    """Draw ``scene`` on the trusted patches, form factors and camera view (``given``) with the submission's R5.
 
     The per-patch values shown come from ``given["display"]`` when the test gives them (the reference's
-    R3 and R4), else from the submission's own R3 and R4.
+    R3 and R4), else from the submission's own R3 and R4. Everything stage 3 would compute arrives as data.
     """
     sc = parse_scene(scene, "<probe scene>")
+    if "view" not in given or "quads" not in given:
+        raise KitError("this test gives no trusted system (the reference's 'solved_system' or 'system'): a grading "
+                       "worker has no stage-3 code for the patches' form factors or the camera's view")
     quads, parent = given["quads"], given["parent"]
     p = Patches(quads, parent, given["areas"], given["reflectance"], given["emission"], quads)
     if "display" in given:
@@ -352,7 +360,7 @@ def probe_render(impl: Any, scene: dict, size: list[int], tolerance: float = 1e-
         display = solve_progressive(impl, MatrixRows(given["F"]), p.areas, p.reflectance, p.emission, tolerance,
                                     max_shots, 1.0, use_ambient).display
     image = draw_solution(sc, impl, p, display, (int(size[0]), int(size[1])), STAGE.options(sc).exposure,
-                          view=given.get("view"))
+                          view=given["view"])
     return {"image": np.clip(image * sc.image.exposure, 0.0, 1.0), "display": display}
 
 

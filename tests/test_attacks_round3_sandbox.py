@@ -1,0 +1,153 @@
+"""Hostile submissions of the third round (issue 34) against the sandbox itself: other copies of the kit on the
+host (item 5), what one test leaves for the next (item 3), and disk, CPU and processes (item 7).
+
+Each attack is built here at run time in a temporary folder and graded through the paths of
+``test_attacks.py``: locally, in a roster, and through the Gradescope zip in the layout its own ``setup.sh``
+makes, under bubblewrap and under the uid-only fallback. The uid fallback's runs happen as on a server with no
+other copy of the kit (``hidden_host.py``: this machine's checkout and ``/tmp`` hidden), so what they find is
+only what the test puts there. Attacks print ``LEAKED`` when they get what they reach for, ``BLOCKED`` when not.
+"""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import stat
+import subprocess
+import sys
+import time
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from cs451 import KIT_ROOT
+from cs451.grading import canary, sandbox
+from cs451.packaging.gradescope import build_gradescope
+
+from conftest import world_readable_dir
+from test_attacks import TASKS, attack, graded, run_gradescope
+
+pytestmark = pytest.mark.skipif(not sandbox.is_root(), reason="the attacks are graded as a root grader grades them")
+
+
+@pytest.fixture(scope="module")
+def corpus():
+    root = world_readable_dir("cs451-round3-")
+    yield root
+    shutil.rmtree(root, ignore_errors=True)
+
+
+# --- item 5: other copies of the kit on the host ---------------------------------------------------------
+
+def borrower(root: Path, name: str, build: Path, kit_zip: Path) -> Path:
+    """A starter that answers with the reference it finds in a wheel's build folder or an autograder zip."""
+    folder = root / name
+    shutil.copytree(KIT_ROOT / "starter" / "sphere", folder / "sphere", ignore=shutil.ignore_patterns("__pycache__"))
+    (folder / "sphere" / "__init__.py").write_text(
+        "import importlib.util, os, sys, tempfile, zipfile\n"
+        f"BUILD, ZIP = {str(build / 'lib' / 'cs451_kit' / 'reference' / 'sphere')!r}, {str(kit_zip)!r}\n"
+        "def _leak():\n"
+        "    if os.access(BUILD, os.R_OK):\n"
+        "        return BUILD\n"
+        "    try:\n"
+        "        out = tempfile.mkdtemp()\n"
+        "        with zipfile.ZipFile(ZIP) as z:\n"
+        "            z.extractall(out, [n for n in z.namelist() if n.startswith('reference/sphere/')])\n"
+        "        return os.path.join(out, 'reference', 'sphere')\n"
+        "    except OSError:\n"
+        "        return None\n"
+        "_where = _leak()\n"
+        "print('LEAKED' if _where else 'BLOCKED', _where)\n"
+        "if _where:\n"
+        "    _spec = importlib.util.spec_from_file_location('_leaked', os.path.join(_where, '__init__.py'),\n"
+        "                                                   submodule_search_locations=[_where])\n"
+        "    _mod = importlib.util.module_from_spec(_spec)\n"
+        "    sys.modules['_leaked'] = _mod\n"
+        "    _spec.loader.exec_module(_mod)\n"
+        "    globals().update({k: v for k, v in vars(_mod).items() if not k.startswith('__')})\n")
+    for path in [folder, *folder.rglob("*")]:
+        os.chmod(path, 0o755 if path.is_dir() else 0o644)
+    return folder
+
+
+@pytest.fixture
+def stray_copies(gradescope):
+    """What an instructor's machine may hold beside the grading: a wheel's build folder and an autograder zip left
+    in a kit's folder, world-readable, as the kit's own builds once left them (in the layout's folder, which the
+    uid fallback's runs keep visible)."""
+    top = gradescope[0].parent
+    build, kit = top / "cs451-kit-build", top / "instructor-kit"
+    shutil.copytree(KIT_ROOT / "reference" / "sphere", build / "lib" / "cs451_kit" / "reference" / "sphere",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    kit_zip = build_gradescope("sphere", kit / "autograder.zip")
+    for path in [build, kit, *build.rglob("*"), *kit.rglob("*")]:
+        os.chmod(path, 0o755 if path.is_dir() else 0o644)
+    yield build, kit_zip
+    shutil.rmtree(build, ignore_errors=True)
+    shutil.rmtree(kit, ignore_errors=True)
+
+
+def test01_a_readable_copy_of_the_kit_stops_the_uid_fallback_before_any_code_runs(corpus, gradescope, stray_copies):
+    """Before: the borrower printed LEAKED and scored 20/20 (S1, S2) through the build folder. After: the canary finds
+    the copy and nothing is run."""
+    out = run_gradescope(gradescope, borrower(corpus, "borrower-uid", *stray_copies), "uid")
+    assert sum(out.points.values()) == 0 and "LEAKED" not in out.printed, (out.points, out.printed)
+    assert "can read a copy of the kit's reference or answers" in out.summary, out.summary
+    assert str(stray_copies[0]) in out.summary
+
+
+def test02_under_bubblewrap_the_host_copies_are_not_there(corpus, gradescope, stray_copies):
+    """Bubblewrap shows an allow-list (system folders, the Python environment, the engine, the upload, the job):
+    no host /tmp, so the same copies are out of sight, the borrower gets nothing and the reference keeps full marks."""
+    out = run_gradescope(gradescope, borrower(corpus, "borrower-bwrap", *stray_copies), "bubblewrap")
+    assert "LEAKED" not in out.printed and "BLOCKED" in out.printed, (out.printed, out.summary)
+    assert sum(out.points.values()) == 0
+    honest = run_gradescope(gradescope, KIT_ROOT / "reference", "bubblewrap")
+    assert honest.points == {"S1": 10, "S2": 10}, honest.messages
+
+
+def test03_the_kit_s_own_builds_leave_nothing_readable(tmp_path):
+    """The autograder zip is private to its maker (even over an older, readable file, under umask 0); building the
+    wheel's folders (setup.py) happens in a private temporary folder that is gone afterwards."""
+    old = tmp_path / "autograder.zip"
+    old.write_text("an older zip")
+    old.chmod(0o644)
+    mask = os.umask(0)
+    try:
+        build_gradescope("sphere", old)
+    finally:
+        os.umask(mask)
+    assert stat.S_IMODE(old.stat().st_mode) == 0o600 and zipfile.ZipFile(old).namelist()
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    env = {**os.environ, "TMPDIR": str(scratch)}
+    done = subprocess.run([sys.executable, "setup.py", "-q", "build"], cwd=KIT_ROOT, env=env, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert list(scratch.iterdir()) == []
+
+
+def test04_the_canary_finds_every_kind_of_copy_and_nothing_else(tmp_path):
+    """What counts as a copy of the kit's reference or answers (canary.search), and what does not: the starter's
+    docstring example of a region, a student's own package, a folder the grader gives on purpose."""
+    stages = {"sphere", "whitted"}
+    (tmp_path / "a" / "reference" / "sphere").mkdir(parents=True)
+    (tmp_path / "a" / "reference" / "sphere" / "__init__.py").write_text("")
+    (tmp_path / "b" / "autograder" / "whitted").mkdir(parents=True)
+    (tmp_path / "b" / "autograder" / "whitted" / "hidden.py").write_text("TESTS = []\n")
+    (tmp_path / "c" / ".cs451-cache" / "truth").mkdir(parents=True)
+    with zipfile.ZipFile(tmp_path / "kit.whl", "w") as z:
+        z.writestr("cs451_kit/reference/sphere/camera.py", "")
+    (tmp_path / "renamed.py").write_text("def f():\n    # BEGIN SOLUTION S1: hint\n    return 1\n    # END SOLUTION\n")
+    (tmp_path / "example.py").write_text('"""\n    # BEGIN SOLUTION S1: hint\n    ...solution...\n    # END SOLUTION\n"""\n')
+    (tmp_path / "student" / "sphere").mkdir(parents=True)
+    (tmp_path / "student" / "sphere" / "camera.py").write_text("def perspective():\n    return 1\n")
+    (tmp_path / "given" / "reference" / "whitted").mkdir(parents=True)
+    (tmp_path / "given" / "reference" / "whitted" / "__init__.py").write_text("")
+    found, complete, _ = canary.search(str(tmp_path), stages, [str(tmp_path / "given")], time.monotonic() + 60)
+    where = sorted(f.split(":")[0].removeprefix(str(tmp_path)) for f in found)
+    assert complete and where == ["/a/reference/sphere", "/b/autograder/whitted/hidden.py", "/c/.cs451-cache/truth",
+                                  "/kit.whl", "/renamed.py"], found
+    _, complete, _ = canary.search(str(tmp_path), stages, [], time.monotonic() - 1)
+    assert not complete
