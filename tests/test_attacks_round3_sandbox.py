@@ -151,3 +151,86 @@ def test04_the_canary_finds_every_kind_of_copy_and_nothing_else(tmp_path):
                                   "/kit.whl", "/renamed.py"], found
     _, complete, _ = canary.search(str(tmp_path), stages, [], time.monotonic() - 1)
     assert not complete
+
+
+# --- item 3: what one test leaves for the next ----------------------------------------------------------------
+
+#: A channel through the page cache of a file every test can read (the submission's own 4 MiB blob, as staged):
+#: a test sends a message by dropping the blob's pages from the cache (fsync, then POSIX_FADV_DONTNEED: both allowed
+#: on a read-only file) and reading back one page per set bit; the next test reads the bits without touching the
+#: pages (preadv2 with RWF_NOWAIT fails on a page that is not cached). Every import prints what it finds, and
+#: when; perspective() sends its parameters.
+PAGE_CHANNEL = '''import os as _os, time as _time
+_BLOB, _PAGES = _os.path.join(_os.path.dirname(__file__), "blob.bin"), 1024
+
+
+def _receive():
+    fd = _os.open(_BLOB, _os.O_RDONLY)
+    bits = []
+    for page in range(_PAGES):
+        try:
+            _os.preadv(fd, [bytearray(1)], page * 4096, _os.RWF_NOWAIT)
+            bits.append("1")
+        except BlockingIOError:
+            bits.append("0")
+        except OSError:                     # no such reads on this file system (tmpfs): no channel
+            return None
+    _os.close(fd)
+    data = bytes(int("".join(bits[i:i + 8]), 2) for i in range(0, _PAGES, 8))
+    return data[1:1 + data[0]].decode("ascii", "replace") if 0 < data[0] < 100 else None
+
+
+def _send(text):
+    data = bytes([len(text)]) + text.encode()
+    fd = _os.open(_BLOB, _os.O_RDONLY)
+    _os.fsync(fd)
+    _os.posix_fadvise(fd, 0, 0, _os.POSIX_FADV_RANDOM)
+    _os.posix_fadvise(fd, 0, 0, _os.POSIX_FADV_DONTNEED)
+    for i, byte in enumerate(data):
+        for b in range(8):
+            if byte >> (7 - b) & 1:
+                _os.pread(fd, 1, (i * 8 + b) * 4096)
+    _os.close(fd)
+
+
+print("CHANNEL at", repr(_time.time()), "received", repr(_receive()))
+'''
+
+
+def page_channel(root: Path, name: str) -> Path:
+    folder = attack(root, name, "    _send(repr((fovy, aspect, near, far)))\n", at_import=PAGE_CHANNEL)
+    with open(folder / "sphere" / "blob.bin", "wb") as f:
+        f.write(os.urandom(4 << 20))
+    os.chmod(folder / "sphere" / "blob.bin", 0o644)
+    return folder
+
+
+def channel_reports(data: dict) -> list[tuple[float, bool, str]]:
+    """(when the test's worker started, whether the test is hidden, what it received), in the order they ran."""
+    found = []
+    for t in data["tests"]:
+        for line in t["output"].splitlines():
+            if line.startswith("CHANNEL at "):
+                when, received = line.removeprefix("CHANNEL at ").split(" received ", 1)
+                found.append((float(when), t["visibility"] == "after_published", received))
+    return sorted(found)
+
+
+@pytest.mark.parametrize("mode", ["bubblewrap", pytest.param("uid", marks=pytest.mark.slow)])
+def test05_a_hidden_test_s_parameters_never_reach_a_visible_test(mode, corpus, gradescope):
+    """Before (Gradescope layout, bubblewrap): S1.2 received S1.1's parameters, and the visible S2.1, run right after
+    the hidden S1.3, printed the hidden one's, (12.5, 0.4, 0.01, 10000.0), through the staged blob's page cache.
+    After: every visible test runs before any hidden one, and each test reads its own fresh copy of the submission
+    and the engine, so no test receives anything."""
+    from test_packaging import run_autograder
+    root, env = gradescope
+    data = run_autograder((root, {**env, "CS451_SANDBOX": mode}), page_channel(corpus, f"pages-{mode}"),
+                          "--tasks", ",".join(TASKS))
+    reports = channel_reports(data)
+    assert len(reports) == len(data["tests"]), data["output"]          # every test's worker printed
+    hidden_from = min(i for i, (_, hidden, _) in enumerate(reports) if hidden)
+    assert not [r for r in reports[hidden_from:] if not r[1]], reports        # no visible test after a hidden one
+    visible = " ".join(received for _, hidden, received in reports if not hidden)
+    assert "(12.5, 0.4, 0.01, 10000.0)" not in visible, reports
+    assert {received for _, _, received in reports} == {"None"}, reports    # no test receives another's message
+    assert sum(t["score"] for t in data["tests"]) == 20, (reports, data["output"])   # S1 and S2, all earned

@@ -15,10 +15,10 @@ import os
 import sys
 import tempfile
 import time
-from concurrent.futures import ThreadPoolExecutor, as_completed
+from concurrent.futures import Future, ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterator
 
 import numpy as np
 
@@ -271,9 +271,7 @@ def _grade_tests(out: GradeResult, tests: list[Test], probes: Any, reference: Re
     bar = Progress(f"grading {out.stage}", len(tests)) if show_progress else None
     results: dict[int, TestResult] = {}
     with ThreadPoolExecutor(max_workers=max(1, jobs or min(2, os.cpu_count() or 1))) as pool:
-        futures = {pool.submit(work, i): i for i in range(len(tests))}
-        for future in as_completed(futures):
-            i = futures[future]
+        for future, i in _visible_then_hidden(pool, work, tests):
             done = future.result()
             if isinstance(done, TestResult):
                 results[i] = done
@@ -288,6 +286,16 @@ def _grade_tests(out: GradeResult, tests: list[Test], probes: Any, reference: Re
     if bar:
         bar.close()
     out.results = _name_failing_dependencies(out.stage, _edge_cases_need_the_main_tests([results[i] for i in range(len(tests))]))
+
+
+def _visible_then_hidden(pool: ThreadPoolExecutor, work: Any, tests: list[Test]) -> Iterator[tuple[Future, int]]:
+    """Each test's finished run and its index: every visible test's, then the hidden tests' (started only once the
+    visible ones have all ended), so no visible test runs after a hidden one and nothing a hidden test's parameters
+    leave on the machine can reach what a student sees."""
+    for hidden in (False, True):
+        futures = {pool.submit(work, i): i for i, t in enumerate(tests) if t.hidden == hidden}
+        for future in as_completed(futures):
+            yield future, futures[future]
 
 
 def _edge_cases_need_the_main_tests(results: list[TestResult]) -> list[TestResult]:

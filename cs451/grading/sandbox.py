@@ -380,6 +380,9 @@ class Sandbox:
                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # bytecode once, read-only after
         for path in self._tree(engine):
             os.chmod(path, 0o755 if path.is_dir() else 0o644)
+        for pristine in (engine, self.run_dir / "upload"):   # copied afresh for each test (fresh_copies), never shown
+            os.chmod(pristine, 0o700)
+        (self.run_dir / "copies").mkdir(mode=0o711)
         self.mode = self._choose_mode()
 
     @staticmethod
@@ -496,11 +499,11 @@ class Sandbox:
     # -- paths as the worker sees them --
     @property
     def visible_engine(self) -> str:
-        return "/kit" if self.mode == "bubblewrap" else str(self.engine)
+        return "/kit" if self.mode == "bubblewrap" else str(self._copies(None)[0])
 
     @property
     def visible_upload(self) -> str:
-        return "/submission" if self.mode == "bubblewrap" else str(self.run_dir / "upload")
+        return "/submission" if self.mode == "bubblewrap" else str(self._copies(None)[1])
 
     def visible_job(self, job: Path) -> str:
         return "/job" if self.mode == "bubblewrap" else str(job)
@@ -541,6 +544,36 @@ class Sandbox:
     def finish_job(self, job: Path) -> None:
         self._finish_job(job)
 
+    def _copies(self, job: Path | None) -> tuple[Path, Path]:
+        """Where a test's own copies of the engine and the upload lie (job None: as the uid mode's worker sees them).
+
+        Under bubblewrap each test has its own folder (tests may overlap); in the uid mode, which runs one test at
+        a time, every test's copies take the same place, so the request's paths hold for all; with no isolation
+        (a student copy) the worker reads the staged originals."""
+        if self.mode == "bubblewrap" and job is not None:
+            folder = self.run_dir / "copies" / job.name
+        elif self.mode == "uid":
+            folder = self.run_dir / "copies" / "live"
+        else:
+            return self.engine, self.run_dir / "upload"
+        return folder / "engine", folder / "upload"
+
+    def fresh_copies(self, job: Path) -> tuple[Path, Path]:
+        """This test's own copies of the engine and the upload, made now from the private originals.
+
+        Every file a test can read that the kit made for this grading is a new file, so nothing one test leaves in
+        it (its pages dropped from or read into the page cache, say: a channel ``fsync``, ``posix_fadvise`` and
+        ``preadv2(RWF_NOWAIT)`` open on any readable file) reaches the next."""
+        engine, upload = self._copies(job)
+        if engine == self.engine:
+            return engine, upload
+        remove_tree(engine.parent)
+        engine.parent.mkdir(mode=0o711)
+        for source, copy in ((self.engine, engine), (self.run_dir / "upload", upload)):
+            shutil.copytree(source, copy)
+            os.chmod(copy, 0o755)
+        return engine, upload
+
     def worker_args(self, job: Path) -> list[str]:
         return ["-m", "cs451.grading.worker", self.visible_job(job)]
 
@@ -554,7 +587,8 @@ class Sandbox:
         group = cgroups.create(min(limits.submission_memory, self.submission_memory), PROCESS_ALLOWANCE)
         self.cgroups_used = group is not None
         nproc = PROCESS_ALLOWANCE if uid is not None else _count_processes(os.getuid()) + PROCESS_ALLOWANCE
-        command = self._command(python_args, job)
+        engine, upload = self.fresh_copies(job)
+        command = self._command(python_args, job, engine, upload)
         env = worker_env(self.visible_job(job), self.visible_engine)
         if self.mode == "bubblewrap":
             env = {"PATH": "/usr/bin:/bin"}  # bwrap itself; the worker's environment is set inside
@@ -591,6 +625,8 @@ class Sandbox:
                 group.remove()
             if uid is not None:
                 kill_uid(uid)
+            if self.mode == "bubblewrap":
+                remove_tree(engine.parent)
         text = _read_log(log_path)
         log_path.unlink()
         if uid is not None and self.mode == "uid":
@@ -600,7 +636,7 @@ class Sandbox:
             code = 128 - code   # bwrap exits with 128 + the signal that ended the worker: give it back as a signal
         return Completed(code, text, timed_out, out_of_memory, peak)
 
-    def _command(self, python_args: list[str], job: Path) -> list[str]:
+    def _command(self, python_args: list[str], job: Path, engine: Path, upload: Path) -> list[str]:
         python = [sys.executable, "-B", "-s"]
         if self.mode != "bubblewrap":
             return python + python_args
@@ -626,7 +662,7 @@ class Sandbox:
         for path in self.protected:   # a kit installed in the venv (a wheel) lies inside a bound prefix: cover it
             if any(Path(path).is_relative_to(b) for b in bound) and os.path.isdir(path) and not os.path.islink(path):
                 args += ["--perms", "0000", "--tmpfs", str(path)]        # an empty folder no one may open
-        args += ["--ro-bind", str(self.engine), "/kit", "--ro-bind", str(self.run_dir / "upload"), "/submission",
+        args += ["--ro-bind", str(engine), "/kit", "--ro-bind", str(upload), "/submission",
                  "--bind", str(job), "/job", "--chdir", "/job", "--clearenv"]
         for key, value in worker_env("/job", "/kit").items():
             args += ["--setenv", key, value]
