@@ -7,6 +7,8 @@ grader holds while it reads an answer.
 - Control characters: what a submission prints, raises, answers or names reaches no terminal, gradebook,
   results.json, report or Classroom step as raw escape sequences, bidi overrides or other controls; it is
   shown escaped (``\x1b``), in every layout.
+- Memory before refusal: an answer too large is refused from its headers, unread, and the grader holds at most
+  one answer per worker, each read once, in place.
 
 Submissions are built at run time in a temporary folder; those that must fail a hidden case recognise it by
 its own arguments (taken from ``hidden.py`` here), so the attack holds whatever cases the public tests use.
@@ -318,3 +320,120 @@ def test07_printable_escapes_what_a_terminal_obeys_or_hides_and_keeps_the_rest()
     assert printable("\u202e\u2066\u200b\ufeff\u2028") == "\\u202e\\u2066\\u200b\\ufeff\\u2028"
     assert printable("\ud800\U000e0041") == "\\ud800\\U000e0041"    # a lone surrogate; an invisible tag letter
     assert not unsafe(printable("".join(map(chr, range(0x2100)))))
+
+
+# --- item 8: memory before refusal ----------------------------------------------------------------------
+
+def huge_answer(stored_mib: int, deflated_mib: int) -> str:
+    """Code run when the package is imported for any test (the interface check aside): leave an answer of two float
+    arrays, one stored and one deflated (zeros: a few KiB on disk), of these sizes, and report success."""
+    return ("import io as _io, json as _json, os as _os, zipfile as _zipfile\n"
+            "def _member(z, name, mib, method):\n"
+            "    head = _io.BytesIO()\n"
+            "    np.lib.format.write_array_header_1_0(head, {'descr': '<f8', 'fortran_order': False, 'shape': (mib << 17,)})\n"
+            "    info = _zipfile.ZipInfo(name + '.npy')\n"
+            "    info.compress_type = method\n"
+            "    with z.open(info, 'w', force_zip64=True) as f:\n"
+            "        f.write(head.getvalue())\n"
+            "        for _ in range(mib):\n"
+            "            f.write(bytes(1 << 20))\n"
+            "if _json.load(open('request.json'))['probe'] != '__interface__':\n"
+            "    with _zipfile.ZipFile('output.npz', 'w') as z:\n"
+            f"        _member(z, 'a', {stored_mib}, _zipfile.ZIP_STORED)\n"
+            f"        _member(z, 'b', {deflated_mib}, _zipfile.ZIP_DEFLATED)\n"
+            "    open('status.json', 'w').write('{\"ok\": true, \"error\": \"\"}')\n    _os._exit(0)\n")
+
+
+#: Over the limit (256 MiB, all the old reader allowed) and just under it (79 MiB of untrusted.ARRAYS_LIMIT's 80).
+HUGE = {"over": (120, 136), "under": (40, 39)}
+
+MEASURED_GRADE = """
+import json, resource, sys
+from cs451.grading.runner import grade
+result = grade("sphere", sys.argv[1], show_progress=False, tasks=["S1", "S2"], test_timeout=60, jobs=2)
+print(json.dumps({"peak_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+                  "points": {t: sum(r.score for r in result.results if r.test.task == t) for t in ("S1", "S2")},
+                  "messages": [r.verdict.message for r in result.results]}))
+"""
+
+
+def graded_with_peak(folder: Path) -> dict:
+    """Grade S1 and S2 locally, two tests at once, in a fresh process: its points, messages and peak RSS."""
+    done = subprocess.run([sys.executable, "-c", MEASURED_GRADE, str(folder)], cwd=KIT_ROOT, capture_output=True,
+                          text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def test08_a_huge_answer_costs_the_grader_no_more_than_the_limit_two_tests_at_once():
+    """Every test's answer huge. The old reader took the whole file, then each array's bytes and a copy, and the
+    grader kept every answer until the end. Now an answer over the limit is refused from its headers, unread, and
+    one under it is held once, by at most two tests at a time (one per worker)."""
+    from cs451.grading.untrusted import ARRAYS_LIMIT
+    top = world_readable_dir("cs451-huge-")
+    try:
+        honest = graded_with_peak(attack(top, "honest"))
+        assert honest["points"] == {"S1": 10, "S2": 10}
+        for name, (stored, deflated) in HUGE.items():
+            out = graded_with_peak(attack(top, name, at_import=huge_answer(stored, deflated)))
+            assert out["points"] == {"S1": 0, "S2": 0}, out
+            extra = out["peak_mib"] - honest["peak_mib"]
+            if name == "over":
+                assert all("would take" in m and "80 MiB for the whole answer" in m for m in out["messages"]), out
+                assert extra < 16, out
+            else:
+                assert not [m for m in out["messages"] if "could not be read" in m], out
+                assert extra < 2 * (ARRAYS_LIMIT >> 20) + 16, out
+    finally:
+        shutil.rmtree(top, ignore_errors=True)
+
+
+def test09_on_gradescope_a_huge_answer_stays_well_inside_its_768_mb(gradescope):
+    """The zip's run_autograder, one test at a time as on Gradescope: the whole process tree (grader, sandbox and
+    worker), sampled, stays well under Gradescope's default 768 MB with every answer just under the limit."""
+    from bench.autograder import _run_measured
+    root, env = gradescope
+    top = world_readable_dir("cs451-huge-gs-")
+    try:
+        for sub in ("submission", "results"):
+            shutil.rmtree(root / sub, ignore_errors=True)
+            (root / sub).mkdir()
+        folder = attack(top, "under", at_import=huge_answer(*HUGE["under"]))
+        subprocess.run(["cp", "-a", f"{folder}/.", str(root / "submission")], check=True)
+        seconds, peak_mb, code = _run_measured([str(root / "source" / "run_autograder"), "--tasks", "S1,S2"],
+                                               {**env, "CS451_SANDBOX": "bubblewrap"})
+        results = json.loads((root / "results" / "results.json").read_text())
+        assert code == 0 and total_score(results) == 0 and len(results["tests"]) > 0, results.get("output")
+        assert peak_mb < 0.6 * 768, f"{peak_mb:.0f} MB at the peak in {seconds:.1f} s"
+    finally:
+        shutil.rmtree(top, ignore_errors=True)
+
+
+def test10_the_reader_returns_what_numpy_wrote_and_refuses_a_huge_directory_before_parsing_it(tmp_path):
+    """In place and chunked, the reader still returns every array np.savez writes, stored or deflated; a zip
+    directory of 100,000 entries (zipfile parses it whole: 56 MiB for this 9 MiB file) is refused from its end record,
+    even when that record claims one entry."""
+    import zipfile
+    import numpy as np
+    from cs451.grading.untrusted import UntrustedError, read_arrays
+    arrays = {"x": np.arange(12.0).reshape(3, 4), "f": np.asfortranarray(np.arange(6).reshape(2, 3)),
+              "t": np.array(["ab", "cde"]), "b": np.array([True, False]), "e": np.zeros((0, 3)), "s": np.float32(2.5),
+              "big_endian": np.arange(10, dtype=">i4")}
+    for save in (np.savez, np.savez_compressed):
+        save(tmp_path / "answer.npz", **arrays)
+        got = read_arrays(tmp_path / "answer.npz")
+        assert set(got) == set(arrays)
+        for k, want in arrays.items():
+            assert got[k].dtype == np.asarray(want).dtype and np.array_equal(got[k], want), k
+        assert got["f"].flags.f_contiguous and got["x"].flags.writeable
+    with zipfile.ZipFile(tmp_path / "many.npz", "w") as z:
+        for i in range(100_000):
+            z.writestr(f"a{i}.npy", b"")
+    with pytest.raises(UntrustedError, match="directory is larger than 64 arrays need"):
+        read_arrays(tmp_path / "many.npz")
+    data = bytearray((tmp_path / "many.npz").read_bytes())
+    end = data.rfind(b"PK\x05\x06")
+    data[end + 8:end + 12] = (1).to_bytes(2, "little") * 2      # the end record claims one entry
+    (tmp_path / "lying.npz").write_bytes(bytes(data))
+    with pytest.raises(UntrustedError, match="directory is larger than 64 arrays need"):
+        read_arrays(tmp_path / "lying.npz")

@@ -10,6 +10,7 @@ function, or both (:mod:`.expected`).
 """
 from __future__ import annotations
 
+import itertools
 import json
 import os
 import sys
@@ -270,8 +271,9 @@ def _grade_tests(out: GradeResult, tests: list[Test], probes: Any, reference: Re
 
     bar = Progress(f"grading {out.stage}", len(tests)) if show_progress else None
     results: dict[int, TestResult] = {}
-    with ThreadPoolExecutor(max_workers=max(1, jobs or min(2, os.cpu_count() or 1))) as pool:
-        for future, i in _visible_then_hidden(pool, work, tests):
+    workers = max(1, jobs or min(2, os.cpu_count() or 1))
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        for future, i in _visible_then_hidden(pool, work, tests, workers):
             done = future.result()
             if isinstance(done, TestResult):
                 results[i] = done
@@ -281,6 +283,7 @@ def _grade_tests(out: GradeResult, tests: list[Test], probes: Any, reference: Re
             else:
                 verdict = _verdict(tests[i], done, prepared[i][1])
                 results[i] = TestResult(tests[i], _score(tests[i], verdict), verdict, done.output, done.seconds)
+                done.outputs = {}   # judged: the answer is let go before the next test starts
             if bar:
                 bar.advance(note=tests[i].number)
     if bar:
@@ -288,14 +291,20 @@ def _grade_tests(out: GradeResult, tests: list[Test], probes: Any, reference: Re
     out.results = _name_failing_dependencies(out.stage, _edge_cases_need_the_main_tests([results[i] for i in range(len(tests))]))
 
 
-def _visible_then_hidden(pool: ThreadPoolExecutor, work: Any, tests: list[Test]) -> Iterator[tuple[Future, int]]:
+def _visible_then_hidden(pool: ThreadPoolExecutor, work: Any, tests: list[Test], window: int
+                         ) -> Iterator[tuple[Future, int]]:
     """Each test's finished run and its index: every visible test's, then the hidden tests' (started only once the
     visible ones have all ended), so no visible test runs after a hidden one and nothing a hidden test's parameters
-    leave on the machine can reach what a student sees."""
+    leave on the machine can reach what a student sees. At most ``window`` runs are started and not yet taken: a
+    test starts only once the caller has judged an earlier one, so at most that many answers (each up to
+    ``untrusted.ARRAYS_LIMIT``) are held at once, however fast the workers finish."""
     for hidden in (False, True):
-        futures = {pool.submit(work, i): i for i, t in enumerate(tests) if t.hidden == hidden}
-        for future in as_completed(futures):
-            yield future, futures[future]
+        waiting = iter([i for i, t in enumerate(tests) if t.hidden == hidden])
+        running = {pool.submit(work, i): i for i in itertools.islice(waiting, window)}
+        while running:
+            future = next(as_completed(running))
+            yield future, running.pop(future)
+            running.update({pool.submit(work, i): i for i in itertools.islice(waiting, 1)})
 
 
 def _edge_cases_need_the_main_tests(results: list[TestResult]) -> list[TestResult]:
