@@ -17,11 +17,11 @@ import numpy as np
 
 from cs451.compare import ImageTolerance
 from cs451.grading.checks import all_of, array_close, image_matches, sub
-from cs451.grading.spec import Test, truth
+from cs451.grading.spec import Test, truth, variant
 from cs451.patches import scene_polygons
 from cs451.scene import BUNDLED_DIR, parse_scene
 
-from autograder.hemicube import checks, truth as truths
+from autograder.hemicube import checks, truth as truths, variants
 
 #: The item buffer is exact integers; a few pixels on patch edges may differ between rasterisers.
 IMAGE = ImageTolerance()  # the kit's margin, measured in the README ("Tolerances")
@@ -38,24 +38,26 @@ def tables_test(name, points, resolution) -> Test:
                 all_of([("top face", sub(checks.table_cells, key="top")), ("side face", sub(checks.table_cells, key="side")),
                         ("sum", sub(checks.table_sum))], earn_with=["top face", "side face"]),
                 "each cell within 1e-9 relative of its formula; the cells sum to 1 within 0.6/r²", expected="none",
-                truth=truth(truths.tables), timeout=QUICK)
+                truth=truth(truths.tables), timeout=QUICK, vary=variant(variants.tables))
 
 
 def views_test(name, points, center, normal, up) -> Test:
     return Test(name, "H2", points, "views", {"center": center, "normal": normal, "up": up},
                 array_close("views", rtol=1e-9, atol=1e-12, what="the five view matrices", plural=True),
-                MATRIX_TOL, expected="none", truth=truth(truths.views), timeout=QUICK)
+                MATRIX_TOL, expected="none", truth=truth(truths.views), timeout=QUICK, vary=variant(variants.views))
 
 
 def projections_test(name, points, near, far) -> Test:
     return Test(name, "H3", points, "projections", {"near": near, "far": far},
                 array_close("projections", rtol=1e-9, atol=1e-12, what="the two projections", plural=True),
-                MATRIX_TOL, expected="none", truth=truth(truths.projections), timeout=QUICK)
+                MATRIX_TOL, expected="none", truth=truth(truths.projections), timeout=QUICK,
+                vary=variant(variants.projections))
 
 
 def item_buffer_test(name, points, quads, patch, resolution) -> Test:
     return Test(name, "H4", points, "item_buffer", {"quads": quads, "patch": patch, "resolution": resolution},
-                image_matches(IMAGE), IMAGE.describe(), given="item_buffer_parts", timeout=RENDER)
+                image_matches(IMAGE), IMAGE.describe(), given="item_buffer_parts", timeout=RENDER,
+                vary=variant(variants.item_buffer))
 
 
 def random_items(resolution: int, n: int, seed: int, unseen: int = 0) -> dict:
@@ -74,7 +76,7 @@ def row_sum_test(name, points, resolution, n, seed, unseen=0) -> Test:
     return Test(name, "H5", points, "row_from_items", random_items(resolution, n, seed, unseen),
                 array_close("row", rtol=1e-9, atol=1e-12, what="the row"),
                 "each entry within 1e-9 relative of the sum of its cells' weights", expected="none",
-                truth=truth(truths.row_from_items), timeout=QUICK)
+                truth=truth(truths.row_from_items), timeout=QUICK, vary=variant(variants.row_from_items, unseen=unseen > 0))
 
 
 #: Row tests judge one task each: H5 sums the reference's item buffers (its H1 to H4), H6 fixes the reference's rows.
@@ -88,11 +90,13 @@ def known_row_test(name, task, points, quads, row, entries, want, rtol, resoluti
     fix runs on the trusted hemicube row. Either way no other task of the submission runs.
     """
     labels = what if isinstance(what, list) else [what] * len(entries)
+    kind = "disk" if len(quads) > 2 else "c14" if all(v[0] == 0 for v in quads[1]) else "c11"   # the fresh case's kind
     return Test(name, task, points, ROW_PROBE[task],
                 {"quads": quads, "rows": [row], "resolution": resolution, "rotate": rotate},
                 all_of([("row", sub(checks.known_row, entries=entries, want=[float(w) for w in want], labels=labels,
                                     rtol=rtol))]),
-                f"within {rtol:.1%} of the closed form", expected="none", given="hemicube_buffers", timeout=RENDER)
+                f"within {rtol:.1%} of the closed form", expected="none", given="hemicube_buffers", timeout=RENDER,
+                vary=variant(variants.known_row, kind=kind, task=task, rtol=rtol))
 
 
 def closure_test(name, points, k, resolution) -> Test:
@@ -102,14 +106,14 @@ def closure_test(name, points, k, resolution) -> Test:
                 all_of([("closure", sub(checks.row_closure)), ("the reference's rows", sub(checks.rows_like_reference))],
                        earn_with=["the reference's rows"]),
                 "every row sums to 1 within 0.5%, entries within 0.002 of the reference's hemicubes",
-                given="hemicube_buffers", timeout=RENDER)
+                given="hemicube_buffers", timeout=RENDER, vary=variant(variants.closure))
 
 
 def contour_test(name, points, point, normal, polygon) -> Test:
     return Test(name, "H6", points, "contour", {"point": point, "normal": normal, "polygon": polygon},
                 array_close("F", rtol=1e-9, atol=1e-12, what="F"),
                 "within 1e-9 relative of Lambert's formula", expected="none", truth=truth(truths.contour_value),
-                timeout=QUICK)
+                timeout=QUICK, vary=variant(variants.contour))
 
 
 UNIT_SQUARE_ABOVE = truths.square(0, 0, 1, 1, False)

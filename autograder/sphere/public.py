@@ -13,12 +13,12 @@ import json
 
 from cs451.compare import ImageTolerance
 from cs451.grading.checks import all_of, array_close, image_matches, sub
-from cs451.grading.spec import Test, truth
+from cs451.grading.spec import Test, truth, variant
 
 from cs451.scene import BUNDLED_DIR, load_scene
 from cs451.stages.sphere import drawing_calls
 
-from autograder.sphere import checks, truth as truths
+from autograder.sphere import checks, truth as truths, variants
 
 #: Tolerance of the image tests: the measured margin is in the kit README ("Tolerances").
 IMAGE = ImageTolerance()  # the kit's margin, measured in the README ("Tolerances")
@@ -38,12 +38,14 @@ def scene_variant(**changes) -> dict:
 
 def perspective_test(name, points, **params) -> Test:
     return Test(name, "S1", points, "perspective", params, array_close("matrix", what="the matrix"),
-                MATRIX_TOL, expected="none", truth=truth(truths.perspective), timeout=QUICK)
+                MATRIX_TOL, expected="none", truth=truth(truths.perspective), timeout=QUICK,
+                vary=variant(variants.perspective))
 
 
 def look_at_test(name, points, **params) -> Test:
     return Test(name, "S2", points, "look_at", params, array_close("matrix", what="the matrix"),
-                MATRIX_TOL, expected="none", truth=truth(truths.look_at), timeout=QUICK)
+                MATRIX_TOL, expected="none", truth=truth(truths.look_at), timeout=QUICK,
+                vary=variant(variants.look_at))
 
 
 MESH_CHECKS = all_of([("vertex and triangle counts", sub(checks.mesh_counts)),
@@ -61,7 +63,7 @@ HANDOUT_VIEW = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, -8.0
 def model_view_test(name, points, calls, view=HANDOUT_VIEW) -> Test:
     return Test(name, "S3", points, "model_view_matrices", {"view": view, "calls": calls},
                 array_close("matrices", what="the matrices at the draws", plural=True), MATRIX_TOL, expected="none",
-                truth=truth(truths.model_view_matrices), timeout=QUICK)
+                truth=truth(truths.model_view_matrices), timeout=QUICK, vary=variant(variants.model_view_matrices))
 
 
 def scene_calls(name: str) -> list:
@@ -72,13 +74,13 @@ def scene_calls(name: str) -> list:
 def mesh_test(name, points, **params) -> Test:
     return Test(name, "S4", points, "sphere_mesh", params, MESH_CHECKS,
                 "positions within 1e-6·radius of freeglut's; normals unit within 1e-5", expected="none",
-                truth=truth(truths.sphere_mesh), timeout=QUICK)
+                truth=truth(truths.sphere_mesh), timeout=QUICK, vary=variant(variants.sphere_mesh))
 
 
 def shader_test(name, task, points, scene, size) -> Test:
     shading = "gouraud" if task == "S5" else "phong"
     return Test(name, task, points, "render", {"scene": scene, "size": list(size), "shading": shading},
-                image_matches(IMAGE), IMAGE.describe(), given="parts", timeout=RENDER)
+                image_matches(IMAGE), IMAGE.describe(), given="parts", timeout=RENDER, vary=variant(variants.render))
 
 
 RESHAPE_CHECKS = all_of([("viewport covers the window", sub(checks.reshape_viewport)),
@@ -91,7 +93,7 @@ def reshape_test(name, points, **params) -> Test:
     params.setdefault("camera", SPHERE_SCENE["camera"])
     return Test(name, "S7", points, "reshape", params, RESHAPE_CHECKS,
                 "viewport exact; aspect and field of view within 1e-6 relative", expected="none",
-                given="reshape_parts", truth=truth(truths.reshape), timeout=QUICK)
+                given="reshape_parts", truth=truth(truths.reshape), timeout=QUICK, vary=variant(variants.reshape))
 
 
 def keys_test(name, points, presses) -> Test:
@@ -100,7 +102,7 @@ def keys_test(name, points, presses) -> Test:
     parts = [(f"press {i + 1} ({key!r})", sub(checks.key_press, index=i)) for i, (key, _) in enumerate(presses)]
     return Test(name, "S8", points, "handle_key", {"presses": presses},
                 all_of(parts, earn_with=[parts[i][0] for i in changing]), "exact", expected="none",
-                truth=truth(truths.keys), timeout=QUICK)
+                truth=truth(truths.keys), timeout=QUICK, vary=variant(variants.handle_key))
 
 
 START = {"running": True, "shading": "gouraud", "slices": 32, "stacks": 32}

@@ -15,10 +15,10 @@ import numpy as np
 
 from cs451.compare import ImageTolerance
 from cs451.grading.checks import all_of, array_close, image_matches, image_part_of, sub
-from cs451.grading.spec import Test, check, truth
+from cs451.grading.spec import Test, check, truth, variant
 from cs451.scene import BUNDLED_DIR
 
-from autograder.whitted import checks, truth as truths
+from autograder.whitted import checks, truth as truths, variants
 
 IMAGE = ImageTolerance()  # the kit's margin, measured in the README ("Tolerances")
 #: Time limits per test: generous for clear numpy code (the reference takes under 5 s for each, compiling included).
@@ -81,14 +81,14 @@ def camera_test(name, points, **params) -> Test:
     return Test(name, "W1", points, "camera_rays", params,
                 all_of(parts, earn_with=["through pixel centres (pyrender's camera)"]),
                 "origins exact to 1e-9; unit directions; through pixel centres within 1e-6 in NDC",
-                expected="none", truth=truth(truths.camera), timeout=QUICK)
+                expected="none", truth=truth(truths.camera), timeout=QUICK, vary=variant(variants.camera))
 
 
 def sphere_test(name, points, **params) -> Test:
     return Test(name, "W2", points, "intersect_sphere", params,
                 all_of([("both roots, smaller first, inf on a miss", sub(checks.sphere_roots))]),
                 "roots within 1e-9 × max(|t1|, radius) of exact arithmetic; misses are inf", expected="none",
-                truth=truth(truths.sphere_roots), timeout=QUICK)
+                truth=truth(truths.sphere_roots), timeout=QUICK, vary=variant(variants.intersect_sphere))
 
 
 def triangle_test(name, points, edge_case=False, **params) -> Test:
@@ -96,7 +96,8 @@ def triangle_test(name, points, edge_case=False, **params) -> Test:
     return Test(name, "W3", points, "intersect_triangle", params,
                 all_of([("hits and misses against exact arithmetic", sub(checks.triangle_hits))]),
                 "t within 1e-9 relative of exact arithmetic; misses inf", expected="none",
-                truth=truth(truths.triangle_hits), edge_case=edge_case, timeout=QUICK)
+                truth=truth(truths.triangle_hits), edge_case=edge_case, timeout=QUICK,
+                vary=variant(variants.intersect_triangle if edge_case else variants.triangle_rays))
 
 
 def watertight_test(name, points, center, fan) -> Test:
@@ -119,7 +120,7 @@ def watertight_test(name, points, center, fan) -> Test:
     return Test(name, "W3", points, "intersect_triangle", params,
                 all_of([("no ray slips between triangles", sub(checks.no_gaps, rays=len(targets), triangles=len(tris)))]),
                 "every ray through a shared edge or vertex hits at least one triangle, where exact arithmetic does",
-                expected="none", truth=truth(truths.triangle_hits), timeout=QUICK)
+                expected="none", truth=truth(truths.triangle_hits), timeout=QUICK, vary=variant(variants.fan))
 
 
 BVH_CHECKS = all_of([("a valid hierarchy", sub(checks.bvh_valid)), ("node 0 is the root", sub(checks.bvh_root)),
@@ -130,7 +131,8 @@ BVH_CHECKS = all_of([("a valid hierarchy", sub(checks.bvh_valid)), ("node 0 is t
 def bvh_test(name, points, **params) -> Test:
     return Test(name, "W4", points, "build_bvh", params, BVH_CHECKS,
                 "valid format, every primitive in one leaf of ≤ 8, boxes nested, depth ≤ 64, surface-area cost "
-                "≤ 1.5× a median split's", expected="none", truth=truth(truths.hierarchy_boxes), timeout=HITS)
+                "≤ 1.5× a median split's", expected="none", truth=truth(truths.hierarchy_boxes), timeout=HITS,
+                vary=variant(variants.build_bvh))
 
 
 #: W5's and W7's tests run the submission's own intersection functions inside its closest_hit and shadow rays.
@@ -143,7 +145,8 @@ def depth_test(name, points, scene, size) -> Test:
                         ("unit normals", sub(checks.depth_normals))],
                        require=["primary visibility matches a rasteriser"]),
                 "hit or miss and depth (5e-3 relative) within the range of pyrender's depth buffer over the pixel's central third, on ≥ 98% of pixels",
-                expected="none", given="hit_parts", truth=truth(truths.depth_range), timeout=HITS, depends_on=INTERSECT)
+                expected="none", given="hit_parts", truth=truth(truths.depth_range), timeout=HITS, depends_on=INTERSECT,
+                vary=variant(variants.closest_hit_image))
 
 
 def hits_test(name, points, scene, rays=None, size=None, hierarchy=None) -> Test:
@@ -156,13 +159,15 @@ def hits_test(name, points, scene, rays=None, size=None, hierarchy=None) -> Test
         params["hierarchy"] = hierarchy
     return Test(name, "W5", points, "closest_hit", params, check(checks.hits_match),
                 "same primitive as the reference on ≥ 99% of rays; t within 1e-6 relative; normals within 1e-6",
-                given="hit_parts", timeout=HITS, depends_on=INTERSECT)
+                given="hit_parts", timeout=HITS, depends_on=INTERSECT,
+                vary=variant(variants.closest_hit_rays if rays is not None else variants.closest_hit_image))
 
 
 def shading_test(name, points, **params) -> Test:
     return Test(name, "W6", points, "local_shading", params,
                 array_close("colour", rtol=1e-9, atol=1e-12, what="the colour"),
-                "within 1e-9 relative of the formula", expected="none", truth=truth(truths.shading), timeout=QUICK)
+                "within 1e-9 relative of the formula", expected="none", truth=truth(truths.shading), timeout=QUICK,
+                vary=variant(variants.local_shading))
 
 
 def shadow_test(name, points, scene, origins, targets) -> Test:
@@ -172,12 +177,13 @@ def shadow_test(name, points, scene, origins, targets) -> Test:
                         ("shadow rays counted", sub(checks.shadow_counted))],
                        earn_with=["transmission through every surface crossed"]),
                 "within 1e-9 of a brute-force walk over the objects", expected="none",
-                truth=truth(truths.transmission), timeout=HITS, depends_on=INTERSECT)
+                truth=truth(truths.transmission), timeout=HITS, depends_on=INTERSECT,
+                vary=variant(variants.shadow_transmission))
 
 
 def reflect_test(name, points, **params) -> Test:
     return Test(name, "W8", points, "reflect", params, array_close("r", rtol=0, atol=1e-9, what="the reflected directions", plural=True),
-                "within 1e-9", expected="none", truth=truth(truths.reflect), timeout=QUICK)
+                "within 1e-9", expected="none", truth=truth(truths.reflect), timeout=QUICK, vary=variant(variants.reflect))
 
 
 def refract_test(name, points, **params) -> Test:
@@ -186,13 +192,13 @@ def refract_test(name, points, **params) -> Test:
                         ("refracted directions", sub(checks.refract_directions))],
                        earn_with=["refracted directions"]),
                 "TIR mask exact; directions within 1e-9 of Snell's law by angles", expected="none",
-                truth=truth(truths.refract), timeout=QUICK)
+                truth=truth(truths.refract), timeout=QUICK, vary=variant(variants.refract))
 
 
 def fresnel_test(name, points, **params) -> Test:
     return Test(name, "W10", points, "fresnel", params, array_close("f", rtol=0, atol=1e-9, what="the reflectance"),
                 "within 1e-9 of Fresnel's equations in sine/tangent form", expected="none",
-                truth=truth(truths.fresnel), timeout=QUICK)
+                truth=truth(truths.fresnel), timeout=QUICK, vary=variant(variants.fresnel))
 
 
 #: What a W11 test runs of the submission besides its trace: the camera rays, the hierarchy and the answers of
@@ -202,7 +208,7 @@ TRACE_USES = ("W5", "W6", "W7")
 
 def image_test(name, points, scene, size) -> Test:
     return Test(name, "W11", points, "render", {"scene": scene, "size": list(size)}, image_matches(IMAGE),
-                IMAGE.describe(), given="trace_parts", timeout=RENDER, depends_on=TRACE_USES)
+                IMAGE.describe(), given="trace_parts", timeout=RENDER, depends_on=TRACE_USES, vary=variant(variants.render))
 
 
 def counter_test(name, points, scene, size, expect: dict) -> Test:
@@ -216,7 +222,7 @@ def counter_test(name, points, scene, size, expect: dict) -> Test:
         parts.append((f"{key} rays", sub(checks.counter, key=key, **kw)))
     return Test(name, "W11", points, "render", {"scene": scene, "size": list(size)}, all_of(parts, require=["the image"]),
                 "exact counts, beside an image within the image tolerance", given="trace_parts", timeout=RENDER,
-                depends_on=TRACE_USES)
+                depends_on=TRACE_USES, vary=variant(variants.counters, expect=expect))
 
 
 RNG = np.random.default_rng(12345)

@@ -4,19 +4,29 @@ The kit declares tests in ``autograder/<stage>/public.py`` and ``hidden.py``; ev
 test of ``hidden.py`` is hidden, whatever it says. A student copy has neither
 (they import the truths): it has ``public.json``, the public tests as data,
 written by :func:`write_manifest` when the copy is built.
+
+Given the kit's secret (:func:`variant_secret`), :func:`load_tests` replaces every public
+test's case by its variant's fresh case (``autograder/<stage>/variants.py``), the same for
+every submission graded with that secret and unknown to students.
 """
 from __future__ import annotations
 
+import copy
+import hashlib
 import json
+import os
+import secrets
 from dataclasses import replace
 from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+import numpy as np
+
 from .. import KIT_ROOT, import_from_kit
 from ..errors import KitError
 from ..stages import get_stage
-from .spec import Test
+from .spec import VARIANT_MODULES, Case, Test, jsonable
 
 MANIFEST = "public.json"
 
@@ -46,9 +56,49 @@ def _declared(stage: str, include_hidden: bool) -> list[Test]:
     raise KitError(f"no autograder tests for stage {stage!r} (expected autograder/{stage}/public.py or {MANIFEST})")
 
 
-def load_tests(stage: str, include_hidden: bool = True) -> list[Test]:
-    """The stage's tests in rubric order, numbered per task (S1.1, S1.2, …)."""
+#: The file in the answer cache holding the kit's secret for fresh cases (private to the grader's user).
+SECRET_FILE = "variant-secret"
+
+
+def variant_secret(cache_dir: Path | None = None) -> str:
+    """The kit's secret for fresh cases: made once, at random, in the answer cache (mode 0600), which no
+    submission can read; ``setup.sh`` of a Gradescope zip makes a new one for every image it builds."""
+    from .expected import cache_root
+    path = cache_root(cache_dir) / SECRET_FILE
+    try:
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    except FileExistsError:
+        text = path.read_text().strip()
+        if len(text) < 32:
+            raise KitError(f"{path}: not a secret this kit made (delete it to make a new one)")
+        return text
+    with os.fdopen(fd, "w") as f:
+        f.write(secrets.token_hex(32) + "\n")
+    return path.read_text().strip()
+
+
+def fresh_case(stage: str, test: Test, secret: str) -> Test:
+    """``test`` on its variant's fresh case, drawn from ``secret``, the stage and the test's name (stable per secret)."""
+    seed = hashlib.sha256(f"{secret}\0{stage}\0{test.task}\0{test.name}".encode()).digest()
+    fn = test.vary.resolve(VARIANT_MODULES)
+    case = fn(copy.deepcopy(test.params), np.random.default_rng(int.from_bytes(seed[:8], "little")), **test.vary.kwargs)
+    if not isinstance(case, Case):
+        raise KitError(f"{test.vary.module}.{test.vary.name}: returned {type(case).__name__}, not a Case")
+    params = json.loads(json.dumps(jsonable(case.params)))   # as the worker will read them back
+    if params == test.params:
+        raise KitError(f"{test.name}: its variant {test.vary.name} made the shipped case again")
+    return replace(test, params=params, check=case.check or test.check,
+                   name=f"{test.name}; graded on a fresh case of this kind: {case.describe}")
+
+
+def load_tests(stage: str, include_hidden: bool = True, secret: str | None = None) -> list[Test]:
+    """The stage's tests in rubric order, numbered per task (S1.1, S1.2, …).
+
+    ``secret``: grade the public tests on their fresh cases (:func:`fresh_case`) instead of the shipped ones.
+    """
     tests = _declared(stage, include_hidden)
+    if secret is not None:
+        tests = [fresh_case(stage, t, secret) if not t.hidden and t.vary is not None else t for t in tests]
     order = [t.id for t in get_stage(stage).tasks]
     unknown = sorted({t.task for t in tests} - set(order))
     if unknown:

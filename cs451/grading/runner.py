@@ -32,7 +32,7 @@ from . import sandbox
 from .expected import ReferenceAnswers, TruthValues, expected_for, is_student_copy
 from .checks import target_images
 from .guard import CheckFailed, GuardError, run_guarded
-from .loader import hidden_summary, load_tests
+from .loader import hidden_summary, load_tests, variant_secret
 from .spec import CHECK_MODULES, Outputs, Test, Verdict
 from .untrusted import UntrustedError, read_arrays, read_status, signal_name
 
@@ -199,18 +199,23 @@ def _problems(outputs: Outputs) -> list[str]:
 def grade(stage: str, submission: str | Path, include_hidden: bool = True, show_progress: bool = True,
           jobs: int | None = None, total_timeout: float = 600.0, tasks: list[str] | None = None,
           test_timeout: float | None = None, protected: tuple[Path, ...] = (), unwritable: tuple[Path, ...] = (),
-          submission_memory: int | None = None) -> GradeResult:
+          submission_memory: int | None = None, fresh: bool | None = None) -> GradeResult:
     """Grade one submission of a stage; never raises for anything the submission does.
 
     ``submission``: the word ``reference`` (the kit's own, trusted), ``starter``, or a folder;
     ``tasks`` keeps only those tasks' tests; ``test_timeout`` overrides every test's time limit;
     ``protected`` adds paths the sandbox must hide (a roster's other submissions, its output),
     ``unwritable`` folders it must not write in (Gradescope's results).
+    ``fresh``: grade the public tests on fresh cases from the kit's secret (default: whenever the hidden tests
+    are graded in the instructor's kit; a student copy, or ``include_hidden=False``, keeps the shipped cases).
     Raises ``KitError`` when the submission cannot be isolated here (it is then not run).
     """
     start = time.perf_counter()
     get_stage(stage)
-    tests = [t for t in load_tests(stage, include_hidden) if tasks is None or t.task in tasks]
+    if fresh is None:
+        fresh = include_hidden and not is_student_copy(stage)
+    secret = variant_secret() if fresh else None
+    tests = [t for t in load_tests(stage, include_hidden, secret) if tasks is None or t.task in tasks]
     if test_timeout is not None:
         tests = [replace(t, timeout=test_timeout) for t in tests]
     out = GradeResult(stage, str(submission))

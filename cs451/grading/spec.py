@@ -11,6 +11,13 @@ the public tests as data (``public.json``, written by ``cs451 release``) with th
 truths already evaluated into arrays beside the reference's answers, so that no
 code that computes an answer ever reaches a student. Only ``checks.py`` ships,
 and it only compares.
+
+A public test also names a *variant* (``vary``, from ``autograder/<stage>/variants.py``,
+which never ships either): a function that makes a fresh case of the same form from
+the shipped one. Grading with the instructor's kit (a roster, the Gradescope zip,
+``cs451 grade`` with the hidden tests) grades every public test on its fresh case, made
+from the kit's private secret (:func:`cs451.grading.loader.load_tests`), so the answers
+a release ships answer nothing there.
 """
 from __future__ import annotations
 
@@ -29,6 +36,8 @@ Outputs = dict[str, np.ndarray]
 #: Modules a check may come from (they ship to students) and modules a truth may come from (they never do).
 CHECK_MODULES = re.compile(r"^(cs451\.grading\.checks|autograder\.\w+\.checks)$")
 TRUTH_MODULES = re.compile(r"^autograder\.\w+\.truth$")
+#: Modules a variant may come from (they never ship).
+VARIANT_MODULES = re.compile(r"^autograder\.\w+\.variants$")
 
 
 @dataclass
@@ -109,6 +118,22 @@ def truth(fn: Callable[..., Any], **kwargs: Any) -> Ref:
 
 
 @dataclass(frozen=True)
+class Case:
+    """A variant's fresh case: the new parameters, a short description a student can act on, and the check
+    when the check itself holds numbers of the case (a closed form, a count of rays)."""
+    params: dict[str, Any]
+    describe: str
+    check: Ref | None = None
+
+
+def variant(fn: Callable[..., Case], **kwargs: Any) -> Ref:
+    """Name a variant ``fn(params, rng, **kwargs) -> Case`` from a ``variants`` module."""
+    ref = Ref.to(fn, **kwargs)
+    ref.resolve(VARIANT_MODULES)
+    return ref
+
+
+@dataclass(frozen=True)
 class Test:
     """One graded test; ``task`` is the stable ID shared with the handout, the code and the rubric.
 
@@ -133,6 +158,8 @@ class Test:
     #: earlier tasks whose functions this test runs as the submission's own (no trusted stand-in exists):
     #: a failing test names them, and says which of them fail their own tests
     depends_on: tuple[str, ...] = ()
+    #: a public test's variant (:func:`variant`): the fresh case the instructor's kit grades instead of this one
+    vary: Ref | None = None
 
     @property
     def visibility(self) -> str:

@@ -2,8 +2,10 @@
 
 Gradescope runs every submission in a fresh container, so answers computed while
 grading would be computed again for each of 300 students: ``setup.sh`` warms the
-cache once, when the image is built. A student copy has neither the reference nor
-the truths: it ships their answers to the public tests instead, as arrays.
+cache once, when the image is built: the answers to the hidden tests and to the fresh
+cases of the public tests, made from the image's own secret (``setup.sh`` makes a new
+one for each image). A student copy has neither the reference nor the truths: it ships
+their answers to the shipped public cases instead, as arrays.
 """
 from __future__ import annotations
 
@@ -11,14 +13,16 @@ import shutil
 from pathlib import Path
 
 from ..grading.expected import ReferenceAnswers, TruthValues, expected_for
-from ..grading.loader import load_tests
+from ..grading.loader import load_tests, variant_secret
 from ..grading.spec import Test
 from ..progress import Progress
 
 
 def answer_files(stage: str, tests: list[Test] | None = None, show_progress: bool = False) -> list[Path]:
-    """Compute (or find in the cache) every answer the tests need: the reference's and the truths'; their files."""
-    tests = load_tests(stage) if tests is None else tests
+    """Compute (or find in the cache) every answer the tests need: the reference's and the truths'; their files.
+
+    ``tests``: by default what the kit grades, the hidden tests and the public tests on their fresh cases."""
+    tests = load_tests(stage, secret=variant_secret()) if tests is None else tests
     reference = ReferenceAnswers(stage)
     truths = TruthValues(stage)
     files: list[Path] = []

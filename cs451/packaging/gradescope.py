@@ -50,7 +50,9 @@ else
   "$KIT/.venv/bin/python" -m pip install --progress-bar off --upgrade pip | tail -n 1
   "$KIT/.venv/bin/python" -m pip install --progress-bar off -e "$KIT" | tail -n 1
 fi
-cd "$KIT" && "$KIT/.venv/bin/python" -m cs451 autograder warm {stage}   # every answer, once per image
+# every answer, once per image: the hidden tests' and the public tests' on fresh cases of the same kind, drawn
+# from a secret made here (in $KIT/.cs451-cache, private to root below), so a release's answers replay nothing
+cd "$KIT" && "$KIT/.venv/bin/python" -m cs451 autograder warm {stage}
 chmod -R go-rwx "$KIT" && chmod 0711 "$KIT"       # the worker may pass through to its Python, and read nothing
 [ -L "$KIT/.venv" ] || chmod -R a+rX "$KIT/.venv"
 find "$SOURCE" -mindepth 1 -maxdepth 1 ! -name setup.sh ! -name run_autograder -exec rm -rf {{}} +

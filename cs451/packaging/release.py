@@ -134,7 +134,8 @@ not in this repository). {hidden}
 Your instructor publishes this folder as the assignment's template on GitHub Classroom; accepting
 the assignment makes your own repository from it. Every push to it runs the public tests on GitHub
 (the Actions tab) and keeps the report as an artifact. Those points are your own check, not your
-grade: the grade comes from your instructor's grader, with the hidden tests. If you got this
+grade: the grade comes from your instructor's grader, with the hidden tests, and with the public
+tests run on fresh cases of the same kind (new numbers and scenes; the handout says more). If you got this
 folder another way, make it a repository of your own with `git init`, `git add -A` and
 `git commit -m start`, then push it to a new repository on GitHub.
 """
