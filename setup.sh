@@ -66,7 +66,8 @@ echo "setup: done; the kit's command is .venv/bin/cs451 (or activate: source .ve
 #   xvfb, xauth, x11-utils        a virtual display for the demo windows' tests
 #   gcc, libc6-dev, freeglut3-dev the course notes' own C program, stage 1's oracle (tests/test_notes_program.py)
 #   chromium                      the lecture decks opened offline (tests/test_slides.py)
-apt_install libglu1-mesa xvfb xauth x11-utils gcc libc6-dev freeglut3-dev chromium
+#   git                           the kit's own files as committed (tests/test_architecture.py, the seats)
+apt_install libglu1-mesa xvfb xauth x11-utils gcc libc6-dev freeglut3-dev chromium git
 
 # Compile the ray tracer's kernels now, where waiting is expected, not in a student's first render or a lecture
 # (a few minutes the first time, with a progress bar; numba's cache keeps them afterwards).

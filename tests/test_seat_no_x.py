@@ -79,9 +79,13 @@ def test_every_stage_renders_grades_and_demos_without_x(stage, tmp_path):
     assert load_png(out).max() > 0
 
     submission = world_readable_dir("cs451-nox-sub-")
-    shutil.copytree(KIT_ROOT / "reference" / stage, submission / stage, ignore=shutil.ignore_patterns("__pycache__"))
-    results = tmp_path / "results.json"
-    done = run_without([str(CS451), "grade", stage, "--submission", str(submission), "--results", str(results)], home)
+    try:   # a readable copy of a reference left behind would make every later grading refuse (the canary finds it)
+        shutil.copytree(KIT_ROOT / "reference" / stage, submission / stage, ignore=shutil.ignore_patterns("__pycache__"))
+        results = tmp_path / "results.json"
+        done = run_without([str(CS451), "grade", stage, "--submission", str(submission), "--results", str(results)],
+                           home)
+    finally:
+        shutil.rmtree(submission, ignore_errors=True)
     assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
     graded = json.loads(results.read_text())
     points = sum(t["max_score"] for t in graded["tests"])
@@ -92,7 +96,6 @@ def test_every_stage_renders_grades_and_demos_without_x(stage, tmp_path):
     done = run_without([str(CS451), "demo", stage, "--no-window", "--frames", "2", "-o", str(demo)], home)
     assert done.returncode == 0, done.stderr[-2000:]
     assert list(demo.glob("*.png")), sorted(p.name for p in demo.iterdir()) if demo.exists() else "no folder"
-    shutil.rmtree(submission, ignore_errors=True)
 
 
 def _scene(stage: str) -> str:
