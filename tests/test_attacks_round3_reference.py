@@ -27,6 +27,7 @@ import pytest
 
 from cs451 import KIT_ROOT
 from cs451.grading import sandbox
+from cs451.grading.roster import grade_roster
 from cs451.grading.runner import engine_sources, grade, protected_paths
 from cs451.stages import get_stage, stage_names
 
@@ -55,8 +56,8 @@ _loot, _printed = None, set()
 
 
 def _hemicube_folder(folder, names):
-    """A folder holding a hemicube package's files (the submission's own excepted)."""
-    if os.path.abspath(folder).startswith(MINE):
+    """A folder holding a hemicube package's files (this package excepted, wherever a copy of it lies)."""
+    if os.path.abspath(folder).startswith(MINE) or "_looter.py" in names:
         return False
     for name in names:
         if name.endswith(".py"):
@@ -184,20 +185,29 @@ def assert_nothing_stolen(printed: str, radiosity_score: float, root: Path, whol
     assert report["roots"], "the looter could not import the engine it runs on"
     assert report["complete"] or not whole_disk, "the walk of / did not finish in its time"
     found = report["found"]
-    decoys = [f for f in found if f.endswith(f"/{DECOY}/hemicube")]
-    assert len(decoys) == 1, f"the looter missed its own decoy: {list(found)}"
+    decoys = [f for f in found if f.endswith(f"/{DECOY}/hemicube")]   # the staged copy, and the upload where readable
+    assert decoys, f"the looter missed its own decoy: {list(found)}"
     assert [f for f in found if f not in decoys] == [], f"stage-3 code in reach of the radiosity worker: {list(found)}"
     assert stage3_score(found, root) == 0
 
 
 # --- the layouts ------------------------------------------------------------------------------------
 
-def test01_locally_the_radiosity_worker_finds_no_hemicube_code():
+@pytest.mark.parametrize("path", ["local", "roster"])
+def test01_locally_and_in_a_roster_the_radiosity_worker_finds_no_hemicube_code(path):
     root = world_readable_dir("cs451-looter-")
     try:
-        result = grade("radiosity", looter(root / "upload"), show_progress=False)
-        assert result.isolation.startswith("bubblewrap") or "throwaway" in result.isolation
-        assert_nothing_stolen("\n".join(r.output for r in result.results), result.score, root)
+        if path == "local":
+            result = grade("radiosity", looter(root / "upload"), show_progress=False)
+            assert result.isolation.startswith("bubblewrap") or "throwaway" in result.isolation
+            printed, score = "\n".join(r.output for r in result.results), result.score
+        else:
+            looter(root / "class" / "mallory")
+            grade_roster(stage="radiosity", roster=root / "class", output=root / "grades", show_progress=False)
+            results = json.loads((root / "grades" / "mallory" / "results.json").read_text())
+            printed = "\n".join(t["output"] for t in results["tests"])
+            score = sum(t["score"] for t in results["tests"])
+        assert_nothing_stolen(printed, score, root)
     finally:
         shutil.rmtree(root, ignore_errors=True)
 
@@ -224,7 +234,8 @@ def test02_on_gradescope_the_radiosity_worker_finds_no_hemicube_code(mode, radio
         results = run_autograder((root, {**env, "CS451_SANDBOX": mode}),
                                  looter(work / "upload", extra=(kit, str(root)), skip=skip))
         printed = "\n".join(t["output"] for t in results["tests"])
-        assert_nothing_stolen(printed, results["score"], work, whole_disk=mode == "bubblewrap")
+        score = sum(t["score"] for t in results["tests"])    # no top-level score while hidden tests are in it
+        assert_nothing_stolen(printed, score, work, whole_disk=mode == "bubblewrap")
     finally:
         shutil.rmtree(work, ignore_errors=True)
 
