@@ -16,6 +16,7 @@ import hashlib
 import json
 import os
 import secrets
+import threading
 from dataclasses import replace
 from pathlib import Path
 from types import ModuleType
@@ -65,16 +66,21 @@ def variant_secret(cache_dir: Path | None = None) -> str:
     submission can read; ``setup.sh`` of a Gradescope zip makes a new one for every image it builds."""
     from .expected import cache_root
     path = cache_root(cache_dir) / SECRET_FILE
-    try:
-        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
-    except FileExistsError:
-        text = path.read_text().strip()
-        if len(text) < 32:
-            raise KitError(f"{path}: not a secret this kit made (delete it to make a new one)")
-        return text
-    with os.fdopen(fd, "w") as f:
-        f.write(secrets.token_hex(32) + "\n")
-    return path.read_text().strip()
+    if not path.exists():   # written whole, then linked into place: a roster's graders may all start at once
+        tmp = path.with_name(f"{SECRET_FILE}.{os.getpid()}.{threading.get_ident()}.tmp")
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+        with os.fdopen(fd, "w") as f:
+            f.write(secrets.token_hex(32) + "\n")
+        try:
+            os.link(tmp, path)
+        except FileExistsError:
+            pass
+        finally:
+            tmp.unlink()
+    text = path.read_text().strip()
+    if len(text) < 32:
+        raise KitError(f"{path}: not a secret this kit made (delete it to make a new one)")
+    return text
 
 
 def fresh_case(stage: str, test: Test, secret: str) -> Test:
