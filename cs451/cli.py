@@ -324,9 +324,10 @@ def build_parser() -> argparse.ArgumentParser:
     rl.set_defaults(func=_cmd_release)
 
     b = sub.add_parser("bench", help="time-against-error benchmarks", description="Run a stage's benchmark; prints a table and writes JSON.")
-    b.add_argument("stage", choices=stages + ["autograder", "tolerance"],
+    b.add_argument("stage", choices=stages + ["autograder", "tolerance", "fair_share"],
                    help="a stage; 'autograder' (grading time and memory per stage, against Gradescope's limits); "
-                        "'tolerance' (image tests' spread across rasterisers and thread counts)")
+                        "'tolerance' (image tests' spread across rasterisers and thread counts); 'fair_share' (an "
+                        "honest student's roster grading beside a CPU burner, with and without the CPU share)")
     b.add_argument("-o", "--output", default="bench-results", help="folder for the JSON and plots (default: bench-results)")
     b.add_argument("--quick", action="store_true", help="fewer repetitions")
     b.set_defaults(func=_cmd_bench)

@@ -15,6 +15,7 @@ import shutil
 import stat
 import subprocess
 import sys
+import threading
 import time
 import zipfile
 from pathlib import Path
@@ -234,3 +235,95 @@ def test05_a_hidden_test_s_parameters_never_reach_a_visible_test(mode, corpus, g
     assert "(12.5, 0.4, 0.01, 10000.0)" not in visible, reports
     assert {received for _, _, received in reports} == {"None"}, reports    # no test receives another's message
     assert sum(t["score"] for t in data["tests"]) == 20, (reports, data["output"])   # S1 and S2, all earned
+
+
+# --- item 7: disk, CPU and processes ------------------------------------------------------------------------
+
+#: Five files of 255 MiB (under the 256 MiB per-file limit) into each place a test may write, saying after each file
+#: how much it holds there; then the right answer, so the attack costs nothing unless it is stopped.
+DISK_FILLER = '''    import os
+    for place in (".", "/tmp", "/dev/shm"):
+        total = 0
+        try:
+            for i in range(5):
+                with open(os.path.join(place, f"fill-{os.getpid()}-{i}"), "wb") as f:
+                    for _ in range(255):
+                        f.write(b"x" * (1 << 20))
+                total += 255 << 20
+                print("WROTE", place, total, flush=True)
+        except OSError as err:
+            print("STOPPED", place, total, type(err).__name__, flush=True)
+'''
+
+
+def written(printed: str) -> dict[str, int]:
+    """The most the filler held in each place, by its own reports."""
+    held: dict[str, int] = {}
+    for line in printed.splitlines():
+        if line.startswith(("WROTE ", "STOPPED ")):
+            place, total = line.split()[1:3]
+            held[place] = max(held.get(place, 0), int(total))
+    return held
+
+
+@pytest.mark.parametrize("path", ["local", "local-watch", "gradescope-bubblewrap",
+                                  pytest.param("gradescope-uid", marks=pytest.mark.slow)])
+def test06_a_test_cannot_fill_the_grader_s_disk(path, corpus, gradescope, monkeypatch):
+    """Before: each S1 test wrote 5 × 255 MiB into its job folder (1.25 GiB in the grader's temp folder) and 1.25 GiB
+    into /tmp, and passed. After: the job folder is a 512 MiB tmpfs of its own (where the grader may mount one; else
+    a watch ends the test past 768 MiB, as it does in the uid mode, counting what the uid keeps in shared places),
+    /tmp under bubblewrap 256 MiB and /dev/shm 64 MiB; nothing past that is kept and S2 keeps its points."""
+    if path == "local-watch":
+        monkeypatch.setenv("CS451_NO_MOUNT", "1")
+    out = graded("local" if path == "local-watch" else path, attack(corpus, f"filler-{path}", DISK_FILLER), gradescope)
+    held = written(out.printed)
+    assert held, (out.printed[-2000:], out.summary)
+    mib = 1 << 20
+    if path == "gradescope-uid" or path == "local-watch":   # a watch: ended within a file or so of its cap
+        assert sum(held.values()) <= sandbox.JOB_DISK + sandbox.TMP_DISK + 255 * mib, held
+    else:
+        assert held.get(".", 0) <= sandbox.JOB_DISK and held.get("/tmp", 0) <= sandbox.TMP_DISK, held
+        assert held.get("/dev/shm", 0) <= sandbox.SHM_DISK, held
+    assert out.points.get("S2") == 10, out.messages
+
+
+def test07_each_submission_s_tests_share_the_cpu_with_the_same_weight(corpus):
+    """Two submissions graded at once each get a CPU share of their own with the same weight, and every process a
+    test starts is in its submission's share, whatever sessions it makes (cs451 bench fair_share measures what it
+    does for an honest student beside one that burns the CPU)."""
+    from cs451.grading import cgroups
+    from cs451.grading.runner import engine_sources, protected_paths
+    boxes = [sandbox.Sandbox("sphere", attack(corpus, f"share-{i}"), engine_sources("sphere"), protected_paths())
+             for i in range(2)]
+    with boxes[0] as first, boxes[1] as second:
+        if first.share is None:
+            pytest.skip("no cpu controller to make a share with here")
+        assert first.share.folder != second.share.folder and "CPU share" in first.describe()
+        weight = "cpu.weight" if first.share.version == 2 else "cpu.shares"
+        assert (first.share.folder / weight).read_text() == (second.share.folder / weight).read_text()
+        folders = [first.share.folder, second.share.folder]
+        marker = "cs451-share-child"
+        script = f"import os, subprocess, sys\nos.setsid()\nsubprocess.run([sys.executable, '-c', 'import time; time.sleep(4)', {marker!r}])\n"
+        job = first.new_job()
+        found: list[int] = []
+        runner = threading.Thread(target=first.run, args=(["-c", script], job, sandbox.Limits(30)))
+        runner.start()
+        while runner.is_alive() and not found:
+            for procs in [first.share.folder / "cgroup.procs", *first.share.folder.glob("*/cgroup.procs")]:
+                try:
+                    pids = procs.read_text().split()
+                except OSError:
+                    continue
+                found += [int(p) for p in pids if marker.encode() in _cmdline(int(p))]
+            time.sleep(0.05)
+        runner.join()
+        first.finish_job(job)
+        assert found   # the worker's child, in a session of its own, is in its submission's share
+    assert not [f for f in folders if f.exists()]
+
+
+def _cmdline(pid: int) -> bytes:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes()
+    except OSError:
+        return b""

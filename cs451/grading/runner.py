@@ -57,6 +57,9 @@ def _interpret(done: sandbox.Completed, job: Path, timeout: float, seconds: floa
                                       f"{memory >> 20} MiB together)", done.output, seconds)
     if done.timed_out:
         return ProbeResult(False, {}, f"took longer than the {timeout:g} s limit (an infinite loop?)", done.output, seconds)
+    if done.disk_full:
+        return ProbeResult(False, {}, f"the submission wrote more to disk than a test may keep ({sandbox.JOB_DISK >> 20} "
+                                      f"MiB in its folder, {sandbox.TMP_DISK >> 20} MiB in /tmp)", done.output, seconds)
     try:
         ok, error = read_status(job / "status.json")
         outputs = read_arrays(job / "output.npz") if ok else {}

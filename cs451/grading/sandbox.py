@@ -17,8 +17,15 @@ folder for the next test. The sandbox therefore fails closed:
   every protected path unreadable, or grading stops and says why;
 - every test gets time, CPU, address-space, file-size and output limits, a
   cgroup capping the memory and processes of everything it starts (or, where
-  cgroups cannot be made, a watchdog that sums them), and afterwards every
-  process it left is killed and every file it left is removed.
+  cgroups cannot be made, a watchdog that sums them), a disk quota (its job
+  folder a tmpfs of ``JOB_DISK`` bytes where the grader may mount one, ``/tmp``
+  and ``/dev/shm`` capped tmpfs under bubblewrap, else a watch that sums what it
+  keeps), and afterwards every process it left is killed and every file it
+  left is removed;
+- each test reads its own fresh copy of the engine and the upload, so nothing
+  one test leaves (in the page cache of a file they share, say) reaches the next;
+- each graded submission has a CPU share of the same weight as any other's
+  (:func:`.cgroups.create_share`), however many processes or sessions it makes.
 
 Only the literal word ``reference`` runs without the sandbox (``run_trusted``).
 """
@@ -37,6 +44,7 @@ import tempfile
 import threading
 import time
 from dataclasses import dataclass, field
+from typing import Callable
 from pathlib import Path
 
 try:  # not on Windows: there the student copy runs without limits (nothing to protect)
@@ -52,6 +60,11 @@ from .staging import StagedUpload, stage_upload
 MEMORY_LIMIT = 3 << 30         # bytes of address space per process (llvmpipe reserves generously)
 SUBMISSION_MEMORY = 1 << 30    # bytes of memory for everything one test starts, together
 FILE_LIMIT = 256 << 20         # largest file a worker may write
+JOB_DISK = 512 << 20           # bytes a test may keep in its job folder (its scratch, and its answer)
+TMP_DISK = 256 << 20           # bytes in its /tmp under bubblewrap
+SHM_DISK = 64 << 20            # bytes in its /dev/shm under bubblewrap
+FULL_BELOW = 1 << 20           # a job folder with less free is full: its answer may not have fitted
+MS_NOSUID, MS_NODEV, MNT_DETACH = 2, 4, 2
 PROCESS_ALLOWANCE = 64         # processes and threads a test may run (llvmpipe uses one per core)
 OUTPUT_LIMIT = 4000            # characters of printed output kept
 CLONE_NEWNET = 0x40000000
@@ -116,6 +129,7 @@ class Completed:
     timed_out: bool
     out_of_memory: bool = False
     peak_memory: int = 0          # bytes, where a cgroup or the watchdog measured it
+    disk_full: bool = False       # it filled its job folder's tmpfs, or the disk watch ended it
 
 
 def worker_env(home: str, engine: str) -> dict[str, str]:
@@ -239,6 +253,21 @@ def _world_writable_dirs() -> list[Path]:
     return found
 
 
+def _mount_tmpfs(folder: Path, size: int) -> bool:
+    """Mount a tmpfs of ``size`` bytes on ``folder`` (as root, where this machine lets us: not in most containers,
+    or not with ``CS451_NO_MOUNT``, which the kit's tests use to run the watch that stands in for it)."""
+    if not is_root() or os.environ.get("CS451_NO_MOUNT") or sys.platform != "linux":
+        return False
+    libc = ctypes.CDLL(None, use_errno=True)
+    return libc.mount(b"tmpfs", str(folder).encode(), b"tmpfs", MS_NOSUID | MS_NODEV,
+                      f"size={size},mode=0700".encode()) == 0
+
+
+def _free_bytes(folder: Path) -> int:
+    st = os.statvfs(folder)
+    return st.f_bavail * st.f_frsize
+
+
 def remove_tree(path: Path) -> None:
     """Remove a folder the sandbox wrote, however deep or strange (never following links)."""
     if not os.path.lexists(path):
@@ -345,8 +374,11 @@ class Sandbox:
     run_dir: Path | None = None
     uid_for_tests: bool = False
     cgroups_used: bool = False
+    share: cgroups.ShareGroup | None = None   # this submission's CPU share, the same weight as any other's
+    job_tmpfs: bool = False                   # the job folders are tmpfs mounts of their own (JOB_DISK)
     _jobs: int = 0
     _lock: threading.Lock = field(default_factory=threading.Lock)
+    _job_mounts: set[Path] = field(default_factory=set)   # job folders on a tmpfs of their own (JOB_DISK)
 
     # -- setup and teardown --
     def __enter__(self) -> "Sandbox":
@@ -383,6 +415,9 @@ class Sandbox:
         for pristine in (engine, self.run_dir / "upload"):   # copied afresh for each test (fresh_copies), never shown
             os.chmod(pristine, 0o700)
         (self.run_dir / "copies").mkdir(mode=0o711)
+        self.share = cgroups.create_share()
+        if self.share is not None:
+            self.share.enter()   # the grading of this submission, checks included, shares its CPU with its tests
         self.mode = self._choose_mode()
 
     @staticmethod
@@ -390,9 +425,14 @@ class Sandbox:
         return [Path(d) / n for d, dirs, files in os.walk(root) for n in dirs + files]
 
     def close(self) -> None:
+        for job in list(self._job_mounts):
+            self._finish_job(job)
         if self.run_dir is not None:
             remove_tree(self.run_dir.parent)
             self.run_dir = None
+        if self.share is not None:
+            self.share.remove()
+            self.share = None
 
     # -- choosing the isolation --
     def _choose_mode(self) -> str:
@@ -524,6 +564,10 @@ class Sandbox:
             text += ", as a throwaway user per test"
         if self.mode != "none":
             text += "; memory and processes capped " + ("by a cgroup" if self.cgroups_used else "by a watchdog")
+            text += ", disk " + ("by a tmpfs of fixed size per folder" if self.job_tmpfs and self.mode == "bubblewrap"
+                                 else "by a watch on what it writes")
+            if self.share is not None:
+                text += "; a CPU share equal to any other submission's"
         return text
 
     # -- one test --
@@ -532,6 +576,8 @@ class Sandbox:
             self._jobs += 1
             job = self.run_dir / "jobs" / str(self._jobs)
         job.mkdir(mode=0o700)
+        if _mount_tmpfs(job, JOB_DISK):   # a disk quota; where no mount can be made, run() watches the folder
+            self._job_mounts.add(job)
         return job
 
     def new_job(self) -> Path:
@@ -539,7 +585,29 @@ class Sandbox:
         return self._new_job()
 
     def _finish_job(self, job: Path) -> None:
+        if job in self._job_mounts:
+            self._job_mounts.discard(job)
+            ctypes.CDLL(None, use_errno=True).umount2(str(job).encode(), MNT_DETACH)
         remove_tree(job)
+
+    @staticmethod
+    def _kill_test(proc: subprocess.Popen, group: cgroups.TestGroup | None, uid: int | None) -> Callable[[], None]:
+        """Ends a test at once: its cgroup, or its uid's processes, or its process group."""
+        def kill() -> None:
+            if group is not None:
+                group.kill_all()
+            elif uid is not None:
+                for pid in _processes_of(uid):
+                    try:
+                        os.kill(pid, signal.SIGKILL)
+                    except (ProcessLookupError, PermissionError):
+                        pass
+            else:
+                try:
+                    os.killpg(proc.pid, signal.SIGKILL)
+                except (ProcessLookupError, PermissionError):
+                    pass
+        return kill
 
     def finish_job(self, job: Path) -> None:
         self._finish_job(job)
@@ -584,7 +652,8 @@ class Sandbox:
             os.chown(job, uid, uid)
             for path in job.iterdir():
                 os.chown(path, uid, uid)
-        group = cgroups.create(min(limits.submission_memory, self.submission_memory), PROCESS_ALLOWANCE)
+        group = cgroups.create(min(limits.submission_memory, self.submission_memory), PROCESS_ALLOWANCE, self.share)
+        self.job_tmpfs = job in self._job_mounts
         self.cgroups_used = group is not None
         nproc = PROCESS_ALLOWANCE if uid is not None else _count_processes(os.getuid()) + PROCESS_ALLOWANCE
         engine, upload = self.fresh_copies(job)
@@ -608,19 +677,24 @@ class Sandbox:
             if resource is not None:
                 resource.setrlimit(resource.RLIMIT_NPROC, (nproc, nproc))
 
-        watchdog = None
+        watchdog = disk = None
         try:
             with open(os.open(log_path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600), "wb") as log:
                 proc = subprocess.Popen(command, cwd=job, stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
                                         env=env, start_new_session=True, preexec_fn=preexec if resource else None)
                 if group is None:
                     watchdog = _Watchdog(proc.pid, uid, self.submission_memory)
+                if self.mode != "none" and (job not in self._job_mounts or self.mode == "uid"):
+                    disk = _DiskWatch(job, uid if self.mode == "uid" else None, JOB_DISK + TMP_DISK, self._kill_test(proc, group, uid))
                 timed_out = _wait(proc, limits.wall_seconds)
             out_of_memory = (group.out_of_memory() if group else False) or bool(watchdog and watchdog.tripped)
             peak = group.peak_memory() if group else (watchdog.peak if watchdog else 0)
+            full = bool(disk and disk.tripped) or (self.job_tmpfs and _free_bytes(job) < FULL_BELOW)
         finally:
             if watchdog:
                 watchdog.stop()
+            if disk:
+                disk.stop()
             if group is not None:
                 group.remove()
             if uid is not None:
@@ -634,14 +708,15 @@ class Sandbox:
         code = proc.returncode
         if self.mode == "bubblewrap" and code is not None and 128 < code <= 128 + 64:
             code = 128 - code   # bwrap exits with 128 + the signal that ended the worker: give it back as a signal
-        return Completed(code, text, timed_out, out_of_memory, peak)
+        return Completed(code, text, timed_out, out_of_memory, peak, full)
 
     def _command(self, python_args: list[str], job: Path, engine: Path, upload: Path) -> list[str]:
         python = [sys.executable, "-B", "-s"]
         if self.mode != "bubblewrap":
             return python + python_args
         args = ["bwrap", "--die-with-parent", "--new-session", "--unshare-all", "--cap-drop", "ALL",
-                "--tmpfs", "/tmp", "--proc", "/proc", "--dev", "/dev"]   # first: binds below /tmp go on top
+                "--size", str(TMP_DISK), "--tmpfs", "/tmp",   # first: binds below /tmp go on top
+                "--proc", "/proc", "--dev", "/dev", "--size", str(SHM_DISK), "--tmpfs", "/dev/shm"]
         for top in ("bin", "sbin", "lib", "lib32", "lib64", "libx32"):
             path = Path("/") / top
             if path.is_symlink():
@@ -661,9 +736,10 @@ class Sandbox:
                 bound.append(lib)
         for path in self.protected:   # a kit installed in the venv (a wheel) lies inside a bound prefix: cover it
             if any(Path(path).is_relative_to(b) for b in bound) and os.path.isdir(path) and not os.path.islink(path):
-                args += ["--perms", "0000", "--tmpfs", str(path)]        # an empty folder no one may open
+                args += ["--perms", "0000", "--tmpfs", str(path), "--remount-ro", str(path)]   # empty, no one may open
         args += ["--ro-bind", str(engine), "/kit", "--ro-bind", str(upload), "/submission",
-                 "--bind", str(job), "/job", "--chdir", "/job", "--clearenv"]
+                 "--bind", str(job), "/job", "--remount-ro", "/dev", "--remount-ro", "/",   # nothing else writable
+                 "--chdir", "/job", "--clearenv"]
         for key, value in worker_env("/job", "/kit").items():
             args += ["--setenv", key, value]
         return args + ["--"] + python + python_args
@@ -682,6 +758,63 @@ class Sandbox:
                 except OSError:
                     continue
         _remove_ipc(uid)
+
+
+def _bytes_below(path: Path, limit_entries: int = 200_000) -> tuple[int, int]:
+    """Bytes held on disk by ``path`` and everything below it (no link followed), and the entries counted."""
+    total, entries, todo = 0, 0, [str(path)]
+    while todo and entries < limit_entries:
+        here = todo.pop()
+        try:
+            st = os.lstat(here)
+        except OSError:
+            continue
+        entries += 1
+        total += st.st_blocks * 512
+        if stat.S_ISDIR(st.st_mode):
+            try:
+                todo += [e.path for e in os.scandir(here)]
+            except OSError:
+                continue
+    return total, entries
+
+
+class _DiskWatch:
+    """A disk quota where the job folder has no tmpfs of its own (no mount allowed) or the test may write in shared
+    places (the uid mode): sum what the test keeps in its job folder and, for ``uid``, in ``/tmp``, ``/var/tmp``,
+    ``/dev/shm``…, and end the test past ``cap`` bytes."""
+
+    def __init__(self, job: Path, uid: int | None, cap: int, kill: Callable[[], None], every: float = 0.1):
+        self.job, self.uid, self.cap, self.kill, self.every = job, uid, cap, kill, every
+        self.tripped = False
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._watch, daemon=True)
+        self._thread.start()
+
+    def used(self) -> int:
+        total = _bytes_below(self.job)[0]
+        for folder in _world_writable_dirs() if self.uid is not None else []:
+            try:
+                entries = list(os.scandir(folder))
+            except OSError:
+                continue
+            for entry in entries:
+                try:
+                    if entry.stat(follow_symlinks=False).st_uid == self.uid:
+                        total += _bytes_below(Path(entry.path))[0]
+                except OSError:
+                    continue
+        return total
+
+    def _watch(self) -> None:
+        while not self._stop.wait(self.every):
+            if self.used() > self.cap:
+                self.tripped = True
+                self.kill()
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join()
 
 
 class _Watchdog:
