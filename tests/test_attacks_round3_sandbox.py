@@ -327,3 +327,43 @@ def _cmdline(pid: int) -> bytes:
         return Path(f"/proc/{pid}/cmdline").read_bytes()
     except OSError:
         return b""
+
+
+def test08_a_roster_under_the_uid_fallback_refuses_beside_a_readable_copy(corpus, gradescope):
+    """The roster's path, from a kit kept private (the Gradescope layout's, as ``setup.sh`` left it) with the class
+    and grades private too, as the uid fallback needs. Before: the borrower scored 10/10 on S1 through a
+    world-readable build folder. After: with that folder on the host no submission runs and every row says why;
+    without it, the honest student gets full marks."""
+    from hidden_host import hiding_host
+    root, env = gradescope
+    top = world_readable_dir("cs451-r3-roster-")
+    try:
+        klass, grades = top / "class", top / "grades"
+        shutil.copytree(KIT_ROOT / "reference" / "sphere", klass / "alice" / "sphere", ignore=shutil.ignore_patterns("__pycache__"))
+        build = top / "cs451-kit-build"
+        shutil.copytree(KIT_ROOT / "reference" / "sphere", build / "lib" / "cs451_kit" / "reference" / "sphere",
+                        ignore=shutil.ignore_patterns("__pycache__"))
+        shutil.copytree(borrower(corpus, "borrower-roster", build, top / "none.zip"), klass / "mallory")
+        for path in [build, *build.rglob("*")]:
+            os.chmod(path, 0o755 if path.is_dir() else 0o644)
+        os.chmod(klass, 0o700)
+        grade = ("import csv, json, sys\nfrom cs451.grading.roster import grade_roster\n"
+                 f"grade_roster(stage='sphere', roster={str(klass)!r}, output={str(grades)!r}, show_progress=False, only=['S1'])\n"
+                 f"print(json.dumps(list(csv.DictReader(open({str(grades / 'gradebook.csv')!r})))))\n")
+
+        def rows() -> dict[str, dict]:
+            grades.mkdir(mode=0o700)
+            done = subprocess.run(hiding_host([env["CS451_PYTHON"], "-c", grade], [root.parent, top]),
+                                  capture_output=True, text=True, timeout=600, cwd=env["CS451_HOME"],
+                                  env={**env, "CS451_SANDBOX": "uid"})
+            assert done.returncode == 0, done.stderr[-3000:]
+            return {r["student"]: r for r in json.loads(done.stdout.strip().splitlines()[-1])}
+        refused = rows()
+        assert all(float(r["score"]) == 0 and "can read a copy of the kit's reference" in r["problems"]
+                   for r in refused.values()), [r["problems"] for r in refused.values()]
+        shutil.rmtree(build)
+        shutil.rmtree(klass / "mallory")
+        shutil.rmtree(grades)
+        assert float(rows()["alice"]["score"]) == 10
+    finally:
+        shutil.rmtree(top, ignore_errors=True)
