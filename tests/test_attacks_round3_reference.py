@@ -193,7 +193,7 @@ def assert_nothing_stolen(printed: str, radiosity_score: float, root: Path, whol
 
 # --- the layouts ------------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("path", ["local", "roster"])
+@pytest.mark.parametrize("path", ["local", pytest.param("roster", marks=pytest.mark.slow)])
 def test01_locally_and_in_a_roster_the_radiosity_worker_finds_no_hemicube_code(path):
     root = world_readable_dir("cs451-looter-")
     try:
