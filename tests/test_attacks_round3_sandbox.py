@@ -353,7 +353,7 @@ def test08_a_roster_under_the_uid_fallback_refuses_beside_a_readable_copy(corpus
 
         def rows() -> dict[str, dict]:
             grades.mkdir(mode=0o700)
-            done = subprocess.run(hiding_host([env["CS451_PYTHON"], "-c", grade], [root.parent, top]),
+            done = subprocess.run(hiding_host([env["CS451_PYTHON"], "-c", grade], [Path(env["CS451_HOME"]).parent, top]),
                                   capture_output=True, text=True, timeout=600, cwd=env["CS451_HOME"],
                                   env={**env, "CS451_SANDBOX": "uid"})
             assert done.returncode == 0, done.stderr[-3000:]
@@ -364,6 +364,7 @@ def test08_a_roster_under_the_uid_fallback_refuses_beside_a_readable_copy(corpus
         shutil.rmtree(build)
         shutil.rmtree(klass / "mallory")
         shutil.rmtree(grades)
-        assert float(rows()["alice"]["score"]) == 10
+        alone = rows()["alice"]
+        assert float(alone["score"]) == 10, alone
     finally:
         shutil.rmtree(top, ignore_errors=True)
