@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 from cs451 import KIT_ROOT
+from cs451.grading.results import total_score
 from cs451.imageio import load_png
 from cs451.scene import bundled_scenes, load_scene
 from cs451.stages import get_stage, stage_names
@@ -135,8 +136,8 @@ def test03_every_reference_gets_full_marks_in_the_sandbox_through_the_console_sc
         log = debian.path(f"/root/grade-{stage}.log").read_text()
         results = json.loads(debian.path(f"/root/results-{stage}.json").read_text())
         points = sum(t["max_score"] for t in results["tests"])
-        scores[stage] = (results["score"], points)
-        assert results["score"] == pytest.approx(points) and points > 0, f"{stage}: {results['score']}/{points}\n{log[-1500:]}"
+        scores[stage] = (total_score(results), points)
+        assert total_score(results) == pytest.approx(points) and points > 0, f"{stage}: {total_score(results)}/{points}\n{log[-1500:]}"
         assert "bubblewrap" in log, f"{stage}: not graded in the bubblewrap sandbox:\n{log[-800:]}"
     assert f"{stage} 0" in done.stdout
     _record({"grades": scores})
@@ -148,8 +149,8 @@ def _record(values: dict) -> None:
 
 def test04_the_readme_test_command_runs_there_and_nothing_skips(debian):
     """The README's test command as written; only the optional peers (Embree, Mitsuba 3), which the README's set-up
-    leaves out on purpose, may skip (``PYTEST_ADDOPTS=-rs`` only makes pytest say why each skip happened)."""
-    done = debian.run(f"cd {KIT} && PYTEST_ADDOPTS=-rs {readme_commands()[1]} 2>&1 | tail -n 300", timeout=5400)
+    leaves out on purpose, may skip (``PYTEST_ADDOPTS=-rfEs`` only makes pytest say why each skip happened)."""
+    done = debian.run(f"cd {KIT} && PYTEST_ADDOPTS=-rfEs {readme_commands()[1]} 2>&1 | tail -n 300", timeout=5400)
     lines = done.stdout.strip().splitlines()
     summary = lines[-1] if lines else ""
     assert " passed" in summary and "failed" not in summary and "error" not in summary, done.stdout[-6000:]
