@@ -5,9 +5,10 @@ the reference, the answer cache, a classmate's folder), leave daemons behind,
 fork children that together hold gigabytes, or leave data in a shared temporary
 folder for the next test. The sandbox therefore fails closed:
 
-- it copies the engine, the earlier stages' references the stage builds on, and
-  the staged upload into a private run folder; the worker sees only those
-  (read-only), its own job folder and a private ``/tmp``;
+- it copies the engine (``cs451/`` only: no stage's reference, an earlier stage's
+  results come in as trusted arrays) and the staged upload into a private run
+  folder, fresh for each test; the worker sees only those (read-only), its own
+  job folder and a private ``/tmp``;
 - ``bubblewrap`` (private mount, pid, network, IPC and UTS namespaces) where it
   works, under a throwaway uid per test when the grader is root; else, as root,
   the throwaway uid alone, with the kit's secrets checked unreadable first;
