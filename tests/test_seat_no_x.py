@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import json
 import os
-import shlex
 import shutil
 import subprocess
 import sys
@@ -25,7 +24,7 @@ from cs451.imageio import load_png
 from cs451.stages import stage_names
 
 from conftest import clean_env, world_readable_dir
-from seats.no_x import LIBRARY_DIRS, hidden_libraries, without_x
+from seats.no_x import LIBRARY_DIRS, hidden_libraries, hiding, without_x
 
 pytestmark = pytest.mark.skipif(os.geteuid() != 0 or not shutil.which("unshare") or not sys.platform.startswith("linux"),
                                 reason="hiding libraries needs root and unshare on Linux")
@@ -38,12 +37,7 @@ def run_without(command: list[str], home: Path, hide: list[Path] | None = None, 
     """``command`` through the kit's console script's venv, in a clean environment, with ``hide`` (default: X's
     libraries) unloadable."""
     env = clean_env(home, CS451.parent)
-    if hide is None:
-        wrapped = without_x(command)
-    else:
-        binds = "\n".join(f"mount --bind /dev/null {shlex.quote(str(p))}" for p in hide)
-        wrapped = ["unshare", "--mount", "--propagation", "private", "sh", "-c", f"set -e\n{binds}\nexec \"$@\"\n",
-                   "sh", *command]
+    wrapped = without_x(command) if hide is None else hiding(hide, command)
     return subprocess.run(wrapped, cwd=KIT_ROOT, env=env, capture_output=True, text=True, timeout=timeout)
 
 

@@ -58,10 +58,15 @@ def hidden_libraries() -> list[Path]:
     return hidden
 
 
-def without_x(command: list[str]) -> list[str]:
-    """``command`` run with the X and GLX libraries hidden (needs root and util-linux's unshare)."""
+def hiding(paths: list[Path], command: list[str]) -> list[str]:
+    """``command`` run with each file of ``paths`` covered by /dev/null (needs root and util-linux's unshare)."""
     if not shutil.which("unshare"):
         raise RuntimeError("unshare (util-linux) is needed to hide libraries")
-    binds = "\n".join(f"mount --bind /dev/null {shlex.quote(str(p))}" for p in hidden_libraries())
+    binds = "\n".join(f"mount --bind /dev/null {shlex.quote(str(p))}" for p in paths)
     script = f"set -e\n{binds}\nexec \"$@\"\n"
     return ["unshare", "--mount", "--propagation", "private", "sh", "-c", script, "sh", *command]
+
+
+def without_x(command: list[str]) -> list[str]:
+    """``command`` run with the X and GLX libraries hidden."""
+    return hiding(hidden_libraries(), command)
