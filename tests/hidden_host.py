@@ -3,15 +3,19 @@
 The uid-only sandbox cannot hide a world-readable file, and its canary refuses to grade where the sandbox user
 can read a copy of the kit's reference or answers anywhere (``cs451.grading.canary``). A Gradescope image holds
 none; this machine holds this checkout, the tests' own corpora in ``/tmp`` (copies of the reference) and other
-sessions' copies. :func:`hiding_host` runs a command in a private mount namespace (as root) with a fresh ``/tmp``
-holding only the folders it keeps, and the checkout's secret folders covered by empty private ones.
+sessions' copies (a CI run's clean checkout sits beside the working one). :func:`hiding_host` runs a command in a
+private mount namespace (as root) with a fresh ``/tmp`` holding only the folders it keeps, the checkout's secret
+folders covered by empty private ones, and every other copy the canary would find (searched once a session, as a
+throwaway uid, exactly as the canary searches) covered too: an empty folder over a folder, ``/dev/null`` over a file.
 """
 from __future__ import annotations
 
 import ctypes
+import functools
 import json
 import os
 import sys
+import time
 from pathlib import Path
 
 MS_BIND = 4096
@@ -21,9 +25,39 @@ def hiding_host(command: list[str], keep: list[Path]) -> list[str]:
     """``command`` wrapped: a private mount namespace, a fresh ``/tmp`` with ``keep`` (folders in /tmp) bound back,
     the checkout's reference, specs, tests, history and caches covered."""
     from cs451.grading.runner import protected_paths
+    hide = [str(p) for p in protected_paths() if p.is_dir() and not p.is_symlink()]
     spec = {"argv": command, "keep": [str(k) for k in keep],
-            "hide": [str(p) for p in protected_paths() if p.is_dir() and not p.is_symlink()]}
+            "hide": hide + [p for p in readable_copies() if p not in hide]}
     return ["unshare", "--mount", "--propagation", "private", sys.executable, __file__, json.dumps(spec)]
+
+
+@functools.cache
+def readable_copies() -> tuple[str, ...]:
+    """What the canary finds outside ``/tmp`` as a throwaway uid: paths to copies of the kit's reference or answers
+    that only this machine holds (other checkouts, their archives). Searched in a child that drops to the uid."""
+    from cs451.grading.canary import search
+    from cs451.grading.sandbox import UID_RANGE
+    from cs451.stages import stage_names
+    read, write = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        try:
+            os.close(read)
+            os.setgroups([])
+            os.setgid(UID_RANGE[0] + 7)
+            os.setuid(UID_RANGE[0] + 7)
+            found, complete, _ = search("/", set(stage_names()), ["/tmp"], time.monotonic() + 300)
+            os.write(write, json.dumps({"found": found, "complete": complete}).encode())
+        finally:
+            os._exit(0)
+    os.close(write)
+    with os.fdopen(read, "rb") as answer:
+        data = answer.read()
+    os.waitpid(pid, 0)
+    result = json.loads(data)
+    if not result["complete"]:
+        raise RuntimeError("the search for this machine's readable copies of the kit did not finish in 300 s")
+    return tuple(sorted({line.partition(": ")[0] for line in result["found"]}))
 
 
 def _mount(source: str, target: str, kind: str | None, flags: int, data: str | None) -> None:
@@ -40,8 +74,11 @@ def main(spec: dict) -> None:
         os.makedirs(folder, mode=0o755, exist_ok=True)
         _mount(f"/proc/self/fd/{fd}", folder, None, MS_BIND, None)
         os.close(fd)
-    for folder in spec["hide"]:
-        _mount("tmpfs", folder, "tmpfs", 0, "mode=0700")
+    for path in spec["hide"]:
+        if os.path.isdir(path):
+            _mount("tmpfs", path, "tmpfs", 0, "mode=0700")
+        elif os.path.exists(path):
+            _mount("/dev/null", path, None, MS_BIND, None)
     os.execvp(spec["argv"][0], spec["argv"])
 
 
