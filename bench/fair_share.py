@@ -12,7 +12,6 @@ controller (else both columns grade without a share).
 """
 from __future__ import annotations
 
-import csv
 import json
 import os
 import shutil

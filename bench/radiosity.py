@@ -210,7 +210,7 @@ WALLS = {"floor": [0], "ceiling": [1], "back": [2], "left (red)": [4], "right (g
 def polygon_ids(scene: Any, size: tuple[int, int], quads: np.ndarray | None = None, drawer: Any = None) -> np.ndarray:
     """Which polygon (or which of ``quads``) each pixel shows (-1: none), drawn with the kit's Gouraud drawer from the scene camera."""
     if quads is None:
-        quads, _, _, _ = P.scene_polygons(scene)
+        quads, _, _, _ = P.radiosity_surfaces(scene)
     if drawer is not None:
         from cs451.gl import make_current
         make_current(drawer.ctx)                   # other engines may have made their context current
@@ -230,7 +230,7 @@ def mitsuba_cornell(scene: Any, size: tuple[int, int], spp: int, max_depth: int,
     import mitsuba as mi
 
     mi.set_variant("scalar_rgb")
-    quads, reflectance, radiosity, _ = P.scene_polygons(scene)
+    quads, reflectance, radiosity, _ = P.radiosity_surfaces(scene)
     cam = scene.camera
     objects: dict[str, Any] = {"type": "scene", "integrator": {"type": "path", "max_depth": max_depth},
                                "sensor": {"type": "perspective", "fov_axis": "y", "fov": cam.fovy,
@@ -329,7 +329,7 @@ def furnace_figures(ref: Any, quick: bool) -> list[dict]:
     from autograder.radiosity import truth as T
 
     scene = load_scene("furnace")
-    cube, _, _, _ = P.scene_polygons(scene)
+    cube, _, _, _ = P.radiosity_surfaces(scene)
     patches = R.make_patches(scene, ref, R.STAGE.options(scene).patch_size)
     hemicube = S.MatrixRows(R.hemicube_formfactors(patches.quads, 128, "none").matrix())
     cases = [("exact (Howell, 6 patches)", S.MatrixRows(T.cube_formfactors(patch_normals(cube))), patch_areas(cube)),

@@ -4,7 +4,7 @@ The reference renders every image test's scene again under other rasterisers and
 thread counts and each render is compared with the default llvmpipe render the
 autograder uses, with the autograder's own comparison. Mesa's softpipe stands in
 for "another GPU": an independent rasteriser with its own precision and rules.
-An NVIDIA run is added where a device is lent (see the README's "Tolerances").
+An NVIDIA run is added where a device is lent (see docs/tolerances.md).
 """
 from __future__ import annotations
 

@@ -33,7 +33,7 @@ import numpy as np
 
 from cs451.impl import load_impl, resolve_impl
 from cs451.progress import Progress
-from cs451.raytrace import BVH_KEYS
+from cs451.tracescene import BVH_KEYS
 from cs451.scene import load_scene, parse_scene
 from cs451.stages import whitted as stage
 
@@ -95,8 +95,8 @@ def _torus_only():
 
 
 def _query_rays(scene, n_side: int, seed: int = 7) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    from cs451 import raytrace
-    ts = raytrace.build(scene)
+    from cs451 import tracescene
+    ts = tracescene.build(scene)
     lo, hi = ts.bounds()
     box_lo, box_hi = lo.min(axis=0), hi.max(axis=0)
     cam = scene.camera

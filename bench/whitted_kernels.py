@@ -15,7 +15,7 @@ from typing import Callable, Iterator
 
 import numpy as np
 
-from cs451.raytrace import TraceScene
+from cs451.tracescene import TraceScene
 
 
 def best_of(fn: Callable[[], object], repeats: int) -> float:

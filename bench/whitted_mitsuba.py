@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from cs451.raytrace import TraceScene
+from cs451.tracescene import TraceScene
 from cs451.scene import AreaLight, PointLight, Scene
 
 VARIANT = "scalar_rgb"   # the LLVM variants do not run on the kit's test machine

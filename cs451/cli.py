@@ -1,6 +1,6 @@
-"""The ``cs451`` command: a thin layer over keyword-only functions (as otter-grader's CLI).
+"""The ``cs451`` command: argument parsing and messages over the functions the tests and the Python API call
+too (as otter-grader's CLI), one per subcommand.
 
-Every subcommand forwards to a function the tests and the Python API call too.
 Errors a user can fix print as one line, without a traceback, and exit with 2.
 """
 from __future__ import annotations

@@ -3,7 +3,7 @@
 moderngl (through glcontext) opens a standalone context with EGL, with CGL on macOS and
 with WGL on Windows. Linux tries EGL first (no display needed), then the display's GLX.
 The reference images are llvmpipe's; the image tests' tolerance is what lets another
-rasteriser give the same grades (README, "Tolerances").
+rasteriser give the same grades (docs/tolerances.md).
 """
 from __future__ import annotations
 
@@ -27,9 +27,9 @@ MESA_PACKAGES = ("libegl-mesa0", "libgl1-mesa-dri")
 #: The fix for a missing OpenGL on the other platforms (Linux's names the missing library, see linux_fix).
 FIXES = {
     "darwin": "macOS gives OpenGL 3.3 through CGL on every Mac since 2012; if this fails, use the kit's Docker "
-              "image or dev container (README, 'Installing on your machine'), which render with Mesa's llvmpipe",
+              "image or dev container (docs/installing.md in the kit), which render with Mesa's llvmpipe",
     "win32": "use WSL2 (Ubuntu) and run ./setup.sh there, or update your graphics driver for OpenGL 3.3; "
-             "the kit's Docker image and dev container work too (README, 'Installing on your machine')",
+             "the kit's Docker image and dev container work too (docs/installing.md in the kit)",
 }
 
 

@@ -30,8 +30,9 @@ class Patches:
         return len(self.quads)
 
 
-def scene_polygons(scene: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
-    """The scene's polygons with reflectance and emitted radiosity: (quads, reflectance, emission, labels).
+def radiosity_surfaces(scene: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
+    """What radiosity solves over: the scene's patches (:func:`cs451.patches.scene_polygons`) with a reflectance,
+    an emitted radiosity and a label each: (quads, reflectance, emission, labels).
 
     Area lights become emitters of radiosity π·radiance that reflect nothing.
     """
@@ -101,7 +102,7 @@ def make_patches(scene: Any, subdivide: Callable[[np.ndarray, float], tuple[np.n
     """The scene's polygons, subdivided by ``subdivide`` (a stage-4 implementation's R1, checked), with colours."""
     from .patches import patch_areas
 
-    quads, reflectance, emission, labels = scene_polygons(scene)
+    quads, reflectance, emission, labels = radiosity_surfaces(scene)
     patches, parent = subdivide(quads, patch_size)
     p = Patches(patches, parent, patch_areas(patches), reflectance[parent], emission[parent], quads, labels)
     check_patches(p, scene.label)

@@ -6,11 +6,8 @@ logs (CI, Gradescope) get no carriage-return noise. ``note`` says what is being 
 from __future__ import annotations
 
 import sys
-from typing import Iterable, Iterator, TypeVar
 
 from tqdm import tqdm
-
-T = TypeVar("T")
 
 _verbose = [False]
 
@@ -40,15 +37,3 @@ class Progress:
 
     def close(self) -> None:
         self.bar.close()
-
-
-def track(items: Iterable[T], label: str, total: int | None = None) -> Iterator[T]:
-    """Iterate with a progress bar."""
-    items = list(items) if total is None else items
-    bar = Progress(label, total if total is not None else len(items))  # type: ignore[arg-type]
-    try:
-        for item in items:
-            yield item
-            bar.advance()
-    finally:
-        bar.close()

@@ -51,11 +51,6 @@ def unit_interval(x: Any) -> str | None:
     return None if all(0 <= v <= 1 for v in values) else "must lie in [0, 1]"
 
 
-def below_one(x: Any) -> str | None:
-    values = x if isinstance(x, tuple) else (x,)
-    return None if all(0 <= v < 1 for v in values) else "must lie in [0, 1) (an albedo of 1 or more makes light grow without bound)"
-
-
 def nonzero_vector(x: Any) -> str | None:
     return None if any(v != 0 for v in x) else "must not be the zero vector"
 

@@ -7,11 +7,13 @@ A region inside a function::
     # END SOLUTION
 
 becomes a TODO with the same ID and a ``raise NotImplementedError`` carrying the
-hint. A region at module level (a shared helper) is removed. Nested or
-unbalanced markers are refused with the file and line, as otter-grader does.
+hint. A region at module level (a shared helper) is removed, and a module left with nothing but its docstring
+(the reference's speed-ups, all one region) is left out of the starter: a student gets no empty file to wonder
+about. Nested or unbalanced markers are refused with the file and line, as otter-grader does.
 """
 from __future__ import annotations
 
+import ast
 import re
 import shutil
 from dataclasses import dataclass
@@ -76,8 +78,20 @@ def _expected_files(reference: Path) -> dict[str, str]:
         text = path.read_text()
         if path.suffix == ".py":
             text = "\n".join(replace_solutions(text.splitlines(), rel)) + "\n"
+            if path.name != "__init__.py" and _docstring_only(text):
+                continue
         files[rel] = text
     return files
+
+
+def _docstring_only(source: str) -> bool:
+    """Whether a module holds nothing a program could use: at most a docstring (and ``__future__`` imports)."""
+    try:
+        body = ast.parse(source).body
+    except SyntaxError:
+        return False
+    return all(isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant) and isinstance(node.value.value, str)
+               or isinstance(node, ast.ImportFrom) and node.module == "__future__" for node in body)
 
 
 def _existing_files(starter: Path) -> dict[str, str]:

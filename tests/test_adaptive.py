@@ -161,7 +161,7 @@ def test03_elements_tile_their_patches(shadow):
 
 
 def test04_white_furnace_stays_at_the_closed_form_through_refinement(ctx):
-    quads, _, _, _ = P.scene_polygons(load_scene("furnace"))
+    quads, _, _, _ = P.radiosity_surfaces(load_scene("furnace"))
     patch_quads, _ = subdivide_uniform(quads, 2)
     n, rho = len(patch_quads), 0.9
     patches = Patches(patch_quads, np.repeat(np.arange(6), 4), patch_areas(patch_quads), np.full((n, 3), rho),

@@ -32,14 +32,14 @@ FURNACE = json.loads((BUNDLED_DIR / "furnace.json").read_text())
 @pytest.fixture(scope="module")
 def furnace_cube():
     """The furnace box, one patch per face, with Howell's exact form factors."""
-    quads, _, _, _ = P.scene_polygons(load_scene("furnace"))
+    quads, _, _, _ = P.radiosity_surfaces(load_scene("furnace"))
     return quads, truth.cube_formfactors(patch_normals(quads))
 
 
 @pytest.fixture(scope="module")
 def furnace_fine():
     """The furnace box, 2 × 2 patches per face, with Lambert's contour formula (rows sum to 1)."""
-    quads, _, _, _ = P.scene_polygons(load_scene("furnace"))
+    quads, _, _, _ = P.radiosity_surfaces(load_scene("furnace"))
     fine, _ = subdivide_uniform(quads, 2)
     return fine, truth.contour_formfactors(fine, 6)
 
@@ -254,7 +254,7 @@ def test12_albedo_one_in_a_closed_scene_is_refused():
     data = furnace_variant()
     data["materials"]["white"] = {**data["materials"]["wall"], "diffuse": [1.0, 1.0, 1.0]}
     data["objects"][0]["material"] = "white"
-    quads, rho, E, _ = P.scene_polygons(parse_scene(data, "one-white-wall"))
+    quads, rho, E, _ = P.radiosity_surfaces(parse_scene(data, "one-white-wall"))
     assert P.is_closed(quads) and rho[0].min() == 1.0
     F = truth.cube_formfactors(patch_normals(quads))
     sol = R.solve_progressive(REF, S.MatrixRows(F), patch_areas(quads), rho, E, tolerance=1e-6)
@@ -296,7 +296,7 @@ def test15_a_solve_that_cannot_converge_says_so_and_returns_its_best_state(furna
 # --- patches and vertex colours ----------------------------------------------------------------------
 
 def test16_subdivision_keeps_area_orientation_and_edge_lengths():
-    quads, _, _, _ = P.scene_polygons(load_scene("cornell-box"))
+    quads, _, _, _ = P.radiosity_surfaces(load_scene("cornell-box"))
     patches, parent = R.call_subdivide(REF, quads, 50.0)
     # the published red wall is not quite planar (its subdivided area differs by 3e-6); the others are exact
     assert np.allclose(np.bincount(parent, weights=patch_areas(patches)), patch_areas(quads), rtol=1e-5)
@@ -311,7 +311,7 @@ def test16_subdivision_keeps_area_orientation_and_edge_lengths():
 
 
 def test17_vertex_colours_are_the_average_of_adjoining_patches_of_the_same_polygon():
-    quads, _, _, _ = P.scene_polygons(load_scene("furnace"))
+    quads, _, _, _ = P.radiosity_surfaces(load_scene("furnace"))
     patches, parent = R.call_subdivide(REF, quads[:3], 0.34)
     rng = np.random.default_rng(1)
     radiosity = rng.uniform(0, 1, (len(patches), 3))

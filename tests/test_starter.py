@@ -48,3 +48,18 @@ def test05_starter_imports_and_every_task_is_a_stub():
 def test06_starter_holds_no_solution_text(kit_root):
     starter = "".join(p.read_text() for p in (kit_root / "starter").rglob("*.py"))
     assert "fixed_function_lighting" not in starter and "BEGIN SOLUTION" not in starter
+
+
+def test07_a_module_left_with_only_its_docstring_is_not_in_the_starter(tmp_path):
+    """The reference's speed-ups are one solution region each; a student gets no empty file in their place."""
+    from cs451.starter import generate_starter
+    reference = tmp_path / "reference" / "toy"
+    reference.mkdir(parents=True)
+    (reference / "__init__.py").write_text('"""Toy."""\n')
+    (reference / "fast.py").write_text('"""Compiled loops."""\nfrom __future__ import annotations\n'
+                                       '# BEGIN SOLUTION\nimport math\nX = math.pi\n# END SOLUTION\n')
+    (reference / "plain.py").write_text('"""Plain."""\n\n\ndef f():\n    # BEGIN SOLUTION T1: do it\n    return 1\n'
+                                        '    # END SOLUTION\n')
+    written = generate_starter(tmp_path / "reference", tmp_path / "starter")
+    assert sorted(written) == ["toy/__init__.py", "toy/plain.py"]
+    assert not (tmp_path / "starter" / "toy" / "fast.py").exists()

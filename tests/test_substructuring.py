@@ -48,7 +48,7 @@ def test02_patch_centred_row_is_the_engines_own_row_at_that_place():
 
 @pytest.fixture(scope="module")
 def furnace_elements():
-    quads, _, _, _ = P.scene_polygons(load_scene("furnace"))
+    quads, _, _, _ = P.radiosity_surfaces(load_scene("furnace"))
     patches, _ = subdivide_uniform(quads, 2)
     elements, parent = S.split_patches(patches, 2)
     engine = HemicubeFormFactors(elements, calls(HEMICUBE), resolution=32, proximity="none")

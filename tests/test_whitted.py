@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from cs451 import raytrace
+from cs451 import tracescene
 from cs451.errors import KitError
 from cs451.impl import load_impl, resolve_impl
 from cs451.scene import BUNDLED_DIR, load_scene, parse_scene
@@ -29,7 +29,7 @@ def traced(ref, data: dict, size, **opts):
 
 
 def test01_cornell_box_as_arrays():
-    ts = raytrace.build(load_scene("cornell-box"))
+    ts = tracescene.build(load_scene("cornell-box"))
     assert ts.n_spheres == 0 and ts.n_triangles == 30 and ts.n_planes == 0
     assert len(ts.light_position) == 16                     # the area light's samples
     lo, hi = ts.bounds()
@@ -44,7 +44,7 @@ def test02_bad_scenes_give_one_line_errors(tmp_path):
     data = scene_dict("whitted")
     data["lights"] = [{"type": "directional", "direction": [0, -1, 0]}]
     with pytest.raises(KitError, match=r"lights\[0\].*point and area"):
-        raytrace.build(parse_scene(data, "w.json"))
+        tracescene.build(parse_scene(data, "w.json"))
     data = scene_dict("whitted")
     data["options"] = {"whitted": {"spp": 3}}
     with pytest.raises(KitError, match=r"options\.whitted\.spp: must be a square"):
@@ -52,7 +52,7 @@ def test02_bad_scenes_give_one_line_errors(tmp_path):
     data = scene_dict("rippled-torus")
     data["objects"][1]["file"] = "missing.obj"
     with pytest.raises(KitError, match=r"objects\[1\].file: mesh file .*missing.obj not found"):
-        raytrace.build(parse_scene(data, "t.json"))
+        tracescene.build(parse_scene(data, "t.json"))
 
 
 def test03_lambert_sphere_matches_the_closed_form(ref):
@@ -123,7 +123,7 @@ def test06_primary_visibility_matches_pyrender(ref):
 def test07_hierarchy_is_valid_and_agrees_with_brute_force(ref):
     ts = whitted.prepare(load_scene("cornell-box"), ref, hierarchy=True)
     lo, hi = ts.bounds()
-    assert raytrace.bvh_problems(ts.bvh, lo, hi) == []
+    assert tracescene.bvh_problems(ts.bvh, lo, hi) == []
     o, d = ref.camera_rays(load_scene("cornell-box").camera, 40, 40)
     t1, p1, n1 = ref.closest_hit(ts, o, d)
     visited = ts.counters["nodes_visited"]
@@ -144,7 +144,7 @@ def test09_renders_every_whitted_scene_without_nan(ref):
     for name in ("whitted", "cornell-spheres", "cornell-box", "rippled-torus"):
         image, counters = whitted.render_traced(load_scene(name), ref, (24, 18))
         assert image.shape == (18, 24, 3) and np.isfinite(image).all() and image.max() > 0
-        assert set(counters) == set(raytrace.COUNTERS)
+        assert set(counters) == set(tracescene.COUNTERS)
     _, c = whitted.render_traced(load_scene("rippled-torus"), ref, (24, 18))
     assert c["nodes_visited"] > 0                      # 55k triangles: the hierarchy is used
 

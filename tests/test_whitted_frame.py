@@ -9,7 +9,7 @@ import importlib
 import numpy as np
 import pytest
 
-from cs451 import raytrace
+from cs451 import tracescene
 from cs451.impl import load_impl, resolve_impl
 from cs451.scene import BUNDLED_DIR, load_scene, parse_scene
 from cs451.stages import whitted
@@ -104,7 +104,7 @@ def test03_a_hierarchy_is_built_once_per_geometry(ref):
     end = hierarchy.cache_counts()
     assert end["layouts_built"] == mid["layouts_built"] and end["layouts_reused"] == mid["layouts_reused"] + 1
     # another geometry is another hierarchy
-    ts = raytrace.build(scene)
+    ts = tracescene.build(scene)
     lo, hi = ts.bounds()
     ref.build_bvh(lo * 2.0, hi * 2.0)
     assert hierarchy.cache_counts()["hierarchies_built"] == end["hierarchies_built"] + 1
@@ -112,10 +112,10 @@ def test03_a_hierarchy_is_built_once_per_geometry(ref):
 
 def test04_a_cached_hierarchy_is_what_a_fresh_build_gives_and_cannot_be_spoilt(ref):
     hierarchy = part(ref, "hierarchy")
-    lo, hi = raytrace.build(load_scene("rippled-torus")).bounds()
+    lo, hi = tracescene.build(load_scene("rippled-torus")).bounds()
     first = ref.build_bvh(lo, hi)
-    fresh = dict(zip(raytrace.BVH_KEYS, hierarchy.build(lo, hi, part(ref, "bvh").LEAF_SIZE)))
-    assert all(np.array_equal(first[k], fresh[k]) for k in raytrace.BVH_KEYS)
+    fresh = dict(zip(tracescene.BVH_KEYS, hierarchy.build(lo, hi, part(ref, "bvh").LEAF_SIZE)))
+    assert all(np.array_equal(first[k], fresh[k]) for k in tracescene.BVH_KEYS)
     first["order"][:] = 0                                  # a caller scribbles on what it was handed
     again = ref.build_bvh(lo, hi)
     assert np.array_equal(again["order"], fresh["order"])
@@ -165,24 +165,24 @@ def test06_the_first_compile_says_so_once(ref, capsys):
 def test07_meshes_are_read_once_and_reread_when_the_file_changes(tmp_path):
     obj = tmp_path / "tri.obj"
     obj.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
-    v, f = raytrace.load_mesh(obj, "objects[0].file")
+    v, f = tracescene.load_mesh(obj, "objects[0].file")
     v[:] = 7.0                                             # the caller's copy, not the cache's
-    again, _ = raytrace.load_mesh(obj, "objects[0].file")
+    again, _ = tracescene.load_mesh(obj, "objects[0].file")
     assert np.array_equal(again, [[0, 0, 0], [1, 0, 0], [0, 1, 0]])
     obj.write_text("v 0 0 0\nv 2 0 0\nv 0 2 0\nv 5 5 5\nf 1 2 3\n")
-    changed, _ = raytrace.load_mesh(obj, "objects[0].file")
+    changed, _ = tracescene.load_mesh(obj, "objects[0].file")
     assert changed[1, 0] == 2.0
 
 
 def test08_a_hierarchy_checked_before_is_judged_the_same_and_a_changed_one_again(ref):
-    lo, hi = raytrace.build(load_scene("cornell-box")).bounds()
+    lo, hi = tracescene.build(load_scene("cornell-box")).bounds()
     good = {k: np.array(v) for k, v in ref.build_bvh(lo, hi).items()}
-    assert raytrace.bvh_problems(good, lo, hi) == [] == raytrace.bvh_problems(good, lo, hi)
+    assert tracescene.bvh_problems(good, lo, hi) == [] == tracescene.bvh_problems(good, lo, hi)
     bad = {k: v.copy() for k, v in good.items()}
     bad["order"][0] = bad["order"][1]
-    first = raytrace.bvh_problems(bad, lo, hi)
-    assert first and raytrace.bvh_problems(bad, lo, hi) == first
-    assert raytrace.bvh_problems({**good, "order": [[1, 2], [3]]}, lo, hi)   # unkeyable input is still judged
+    first = tracescene.bvh_problems(bad, lo, hi)
+    assert first and tracescene.bvh_problems(bad, lo, hi) == first
+    assert tracescene.bvh_problems({**good, "order": [[1, 2], [3]]}, lo, hi)   # unkeyable input is still judged
 
 
 def test09_compiled_camera_rays_are_numpys_bit_for_bit(ref):
@@ -226,7 +226,7 @@ def test11_mitsuba_is_handed_the_same_camera_and_geometry(ref, tmp_path):
     mi.set_variant(convert.VARIANT)
     for name in ("rippled-torus", "cornell-spheres"):
         scene = load_scene(name)
-        ts = raytrace.build(scene)
+        ts = tracescene.build(scene)
         image = np.array(mi.render(mi.load_dict(convert.mitsuba_dict(scene, ts, (48, 36), 4, tmp_path)), spp=4))
         o, d = ref.camera_rays(scene.camera, 48, 36)
         with path(ref, compiled=False):

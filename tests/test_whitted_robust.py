@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 
-from cs451 import raytrace
+from cs451 import tracescene
 from cs451.impl import load_impl, resolve_impl
 from cs451.scene import BUNDLED_DIR, load_scene, parse_scene
 from cs451.stages import whitted
@@ -109,7 +109,7 @@ def test03_spawned_rays_never_rehit_their_own_triangle(ref):
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     for side in (1, -1):
         dd = np.where((np.einsum("ij,ij->i", d, n) * side)[:, None] > 0, d, -d)
-        t, prim, _ = ref.closest_hit(ts, raytrace.spawn(p, n, dd), dd)
+        t, prim, _ = ref.closest_hit(ts, tracescene.spawn(p, n, dd), dd)
         assert not np.any(prim == k + ts.n_spheres), "a spawned ray hit its own triangle"
 
 
@@ -117,7 +117,7 @@ def test04_spheres_inside_and_out(ref):
     """From points on a sphere: outward rays never hit it again; inward rays cross it, at the chord length."""
     data = {"camera": {"eye": [0, 0, 10], "center": [0, 0, 0]},
             "objects": [{"type": "sphere", "center": [1e3, -2e3, 5e2], "radius": 0.5}]}
-    ts = raytrace.build(parse_scene(data))
+    ts = tracescene.build(parse_scene(data))
     rng = np.random.default_rng(RNG_SEED)
     n = rng.normal(size=(2000, 3))
     n /= np.linalg.norm(n, axis=1, keepdims=True)
@@ -126,10 +126,10 @@ def test04_spheres_inside_and_out(ref):
     d = rng.normal(size=(2000, 3))
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     out = np.where(np.einsum("ij,ij->i", d, n)[:, None] > 0, d, -d)
-    t, prim, _ = ref.closest_hit(ts, raytrace.spawn(p, n, out), out)
+    t, prim, _ = ref.closest_hit(ts, tracescene.spawn(p, n, out), out)
     assert np.all(prim == -1)
     inward = -out
-    start = raytrace.spawn(p, n, inward)
+    start = tracescene.spawn(p, n, inward)
     t, prim, _ = ref.closest_hit(ts, start, inward)
     exit_point = start + t[:, None] * inward
     chord = 2 * 0.5 * np.einsum("ij,ij->i", -inward, n)
@@ -139,7 +139,7 @@ def test04_spheres_inside_and_out(ref):
 
 
 def test05_grazing_and_parallel_rays_give_no_nan(ref):
-    ts = raytrace.build(parse_scene({"camera": {"eye": [0, 0, 10], "center": [0, 0, 0]},
+    ts = tracescene.build(parse_scene({"camera": {"eye": [0, 0, 10], "center": [0, 0, 0]},
                                      "objects": [{"type": "sphere", "radius": 1},
                                                  {"type": "plane", "point": [0, -1, 0], "normal": [0, 1, 0]}]}))
     o = np.array([[-5, 1, 0], [-5, -1, 0], [-5, 1 + 1e-12, 0], [-5, 1 - 1e-12, 0], [0, -1, 5]], float)
@@ -158,7 +158,7 @@ def test06_degenerate_triangles_are_never_hit(ref, tmp_path):
     data = {"camera": {"eye": [0.3, 0.2, 3], "center": [0.3, 0.2, 0]},
             "objects": [{"type": "mesh", "file": str(obj)}]}
     sc = parse_scene(data, str(tmp_path / "s.json"), source=str(tmp_path / "s.json"))
-    ts = raytrace.build(sc)
+    ts = tracescene.build(sc)
     o = np.tile([[0.5, 0.0, 1.0]], (4, 1)) + np.array([[0, 0, 0], [0.1, 0, 0], [-0.5, 0.5, 0], [-0.2, 0.2, 0]])
     d = np.tile([[0, 0, -1.0]], (4, 1))
     t, prim, normals = ref.closest_hit(ts, o, d)
@@ -231,7 +231,7 @@ def test10_area_light_matches_mitsuba_direct_lighting(ref, tmp_path):
     import trimesh
     mi.set_variant("scalar_rgb")
     sc = load_scene("cornell-box")
-    ts = raytrace.build(sc)
+    ts = tracescene.build(sc)
     shapes = {}
     mats = ts.prim_material[ts.n_spheres:ts.n_bounded]
     for m in np.unique(mats):

@@ -24,7 +24,7 @@ from cs451.scene import BUNDLED_DIR, parse_scene
 from autograder.hemicube import checks, truth as truths, variants
 
 #: The item buffer is exact integers; a few pixels on patch edges may differ between rasterisers.
-IMAGE = ImageTolerance()  # the kit's margin, measured in the README ("Tolerances")
+IMAGE = ImageTolerance()  # the kit's margin, measured in docs/tolerances.md
 MATRIX_TOL = "entries within 1e-9 relative, 1e-12 absolute"
 #: Time limits: generous for clear numpy code (the reference takes well under a second for each).
 QUICK, RENDER = 10.0, 60.0

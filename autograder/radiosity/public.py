@@ -24,11 +24,11 @@ from cs451.grading.checks import all_of, image_matches, sub
 from cs451.grading.spec import Test, check, truth, variant
 from cs451.patches import patch_areas, patch_normals
 from cs451.scene import BUNDLED_DIR, load_scene
-from cs451.patching import scene_polygons
+from cs451.patching import radiosity_surfaces
 
 from autograder.radiosity import checks, truth as truths, variants
 
-IMAGE = ImageTolerance()  # the kit's margin, measured in the README ("Tolerances")
+IMAGE = ImageTolerance()  # the kit's margin, measured in docs/tolerances.md
 #: Time limits: generous for clear numpy code (the reference takes under 2 s for each).
 QUICK, SOLVE, RENDER = 20.0, 60.0, 90.0
 
@@ -42,7 +42,7 @@ def lists(a) -> list:
 
 
 def scene_quads(name: str, count: int | None = None) -> list:
-    quads, _, _, _ = scene_polygons(load_scene(name))
+    quads, _, _, _ = radiosity_surfaces(load_scene(name))
     return lists(quads[:count])
 
 

@@ -20,8 +20,8 @@ from cs451.stages.sphere import drawing_calls
 
 from autograder.sphere import checks, truth as truths, variants
 
-#: Tolerance of the image tests: the measured margin is in the kit README ("Tolerances").
-IMAGE = ImageTolerance()  # the kit's margin, measured in the README ("Tolerances")
+#: Tolerance of the image tests: the measured margin is in docs/tolerances.md.
+IMAGE = ImageTolerance()  # the kit's margin, measured in docs/tolerances.md
 MATRIX_TOL = "entries within 1e-6 relative, 1e-9 absolute"
 #: Time limits per test: generous for clear numpy code (the reference takes under 0.2 s for each).
 QUICK, RENDER = 10.0, 30.0

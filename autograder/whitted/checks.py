@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cs451 import raytrace
+from cs451 import tracescene
 from cs451.grading.checks import output
 from cs451.grading.spec import Verdict
 
@@ -116,13 +116,13 @@ def _hierarchy(out, expected):
     if len(nodes) != 1 or not 1 <= nodes[0] <= 2 * n - 1:
         raise ValueError(f"{nodes[0] if len(nodes) == 1 else nodes} nodes for {n} primitives "
                          f"(a hierarchy over n primitives has 1 to 2n − 1 nodes)")
-    bvh = {k: np.asarray(out[k]) for k in raytrace.BVH_KEYS if k in out}
+    bvh = {k: np.asarray(out[k]) for k in tracescene.BVH_KEYS if k in out}
     return bvh, lo, hi
 
 
 def bvh_valid(out, expected, p):
     bvh, lo, hi = _hierarchy(out, expected)
-    return "; ".join(raytrace.bvh_problems(bvh, lo, hi)[:3]) or None
+    return "; ".join(tracescene.bvh_problems(bvh, lo, hi)[:3]) or None
 
 
 def bvh_root(out, expected, p):
@@ -134,9 +134,9 @@ def bvh_root(out, expected, p):
 
 def bvh_shallow(out, expected, p, max_depth: int = 64):
     bvh, lo, hi = _hierarchy(out, expected)
-    if raytrace.bvh_problems(bvh, lo, hi):
+    if tracescene.bvh_problems(bvh, lo, hi):
         return "not a valid hierarchy (see above)"
-    depth = raytrace.bvh_depth(bvh)
+    depth = tracescene.bvh_depth(bvh)
     if depth > max_depth:
         return f"depth {depth} for {len(lo)} primitives (at most {max_depth}: split the boxes, do not peel them one by one)"
 
@@ -144,7 +144,7 @@ def bvh_shallow(out, expected, p, max_depth: int = 64):
 def bvh_tight(out, expected, p):
     """A good split keeps children's boxes small: the summed surface area of the nodes, against a median split's."""
     bvh, lo, hi = _hierarchy(out, expected)
-    if raytrace.bvh_problems(bvh, lo, hi):
+    if tracescene.bvh_problems(bvh, lo, hi):
         return "not a valid hierarchy (see above)"
     e = np.asarray(bvh["hi"], float) - np.asarray(bvh["lo"], float)
     area = e[:, 0] * e[:, 1] + e[:, 1] * e[:, 2] + e[:, 2] * e[:, 0]

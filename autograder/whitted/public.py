@@ -20,7 +20,7 @@ from cs451.scene import BUNDLED_DIR
 
 from autograder.whitted import checks, truth as truths, variants
 
-IMAGE = ImageTolerance()  # the kit's margin, measured in the README ("Tolerances")
+IMAGE = ImageTolerance()  # the kit's margin, measured in docs/tolerances.md
 #: Time limits per test: generous for clear numpy code (the reference takes under 5 s for each, compiling included).
 QUICK, HITS, RENDER = 20.0, 90.0, 120.0
 

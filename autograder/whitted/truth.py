@@ -14,7 +14,7 @@ from fractions import Fraction
 import numpy as np
 import trimesh
 
-from cs451 import raytrace
+from cs451 import tracescene
 from cs451.pyrender_shim import pyrender
 from cs451.scene import Mesh, Plane, Polygon, Sphere, parse_scene
 
@@ -117,7 +117,7 @@ def triangle_hits(params: dict) -> dict[str, np.ndarray]:
 def hierarchy_boxes(params: dict) -> dict[str, np.ndarray]:
     """The primitives' boxes the hierarchy is built over, and a plain median split's surface-area cost over them."""
     if params.get("scene") is not None:
-        lo, hi = raytrace.build(parse_scene(params["scene"], "<truth scene>")).bounds()
+        lo, hi = tracescene.build(parse_scene(params["scene"], "<truth scene>")).bounds()
     else:
         lo, hi = np.asarray(params["lo"], float).reshape(-1, 3), np.asarray(params["hi"], float).reshape(-1, 3)
     return {"box_lo": lo, "box_hi": hi, "median_cost": np.array(sah_cost(*_median_bvh(lo, hi)))}
@@ -233,7 +233,7 @@ def transmission(p: dict) -> np.ndarray:
     convention every implementation shares.
     """
     sc = parse_scene(p["scene"], "<truth scene>")
-    arrays = raytrace.build(sc)
+    arrays = tracescene.build(sc)
     planes = [obj for obj in sc.objects if isinstance(obj, Plane)]
     o, x = _vec(p, "origins"), _vec(p, "targets")
     out = np.ones((len(o), 3))

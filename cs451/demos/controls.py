@@ -1,4 +1,4 @@
-"""Every demo's keys, written once: the window titles, `cs451 demo --help` and the README's table name them from here.
+"""Every demo's keys, written once: the window titles, `cs451 demo --help` and docs/lecturers.md's table name them from here.
 
 Plain data, cheap to import (the CLI builds its help from it without loading a demo).
 Stage 1's keys are the student's S8 table (the handout's), the others the demos' own.

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from ..patches import patch_areas, patch_centers
+from ..patches import patch_areas
 from .geometry import _sub_quads, clip_polygon_to_plane, gauss_points
 
 #: correct an entry where the kernel says the point estimate is off by more than this (relative)
@@ -167,8 +167,3 @@ def fix_row(calls: Any, quads: np.ndarray, normals: np.ndarray, centers: np.ndar
         counters["proximity_pairs"] = counters.get("proximity_pairs", 0) + 1
         counters["proximity_evaluations"] = counters.get("proximity_evaluations", 0) + contour.evaluations
     return out
-
-
-def centre_stands(quads: np.ndarray, i: int) -> tuple[np.ndarray, np.ndarray]:
-    """Where one hemicube at patch i's centre stands: its centre, weight 1."""
-    return patch_centers(quads[i:i + 1]), np.ones(1)

@@ -203,7 +203,7 @@ def grade(stage: str, submission: str | Path, include_hidden: bool = True, show_
           jobs: int | None = None, total_timeout: float = 600.0, tasks: list[str] | None = None,
           test_timeout: float | None = None, protected: tuple[Path, ...] = (), unwritable: tuple[Path, ...] = (),
           submission_memory: int | None = None, fresh: bool | None = None) -> GradeResult:
-    """Grade one submission of a stage; never raises for anything the submission does.
+    """Grade one submission of a stage: what its code does (wrong answers, crashes, hangs, attacks) costs points.
 
     ``submission``: the word ``reference`` (the kit's own, trusted), ``starter``, or a folder;
     ``tasks`` keeps only those tasks' tests; ``test_timeout`` overrides every test's time limit;
@@ -211,7 +211,9 @@ def grade(stage: str, submission: str | Path, include_hidden: bool = True, show_
     ``unwritable`` folders it must not write in (Gradescope's results).
     ``fresh``: grade the public tests on fresh cases from the kit's secret (default: whenever the hidden tests
     are graded in the instructor's kit; a student copy, or ``include_hidden=False``, keeps the shipped cases).
-    Raises ``KitError`` when the submission cannot be isolated here (it is then not run).
+    Raises ``SubmissionError`` (a ``KitError``) when the upload holds no gradable package (none, too large, not a
+    folder: the student can fix it) and ``KitError`` when it cannot be isolated here; in both cases none of its
+    code has run.
     """
     start = time.perf_counter()
     get_stage(stage)

@@ -12,7 +12,6 @@ claims, so an answer costs the grader no more than its arrays' declared size.
 """
 from __future__ import annotations
 
-import io
 import json
 import os
 import re

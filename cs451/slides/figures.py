@@ -405,7 +405,7 @@ def _modelview(bar: Progress) -> Drawn:
 
 # --- stage 2: Whitted ray tracing --------------------------------------------------------------------------
 
-WHITTED_KIT = ("cs451.stages.whitted", "cs451.stages.base", "cs451.raytrace", "cs451.scene", "cs451.viewing",
+WHITTED_KIT = ("cs451.stages.whitted", "cs451.stages.base", "cs451.tracescene", "cs451.scene", "cs451.viewing",
                "cs451.imageio")
 #: how each kind of ray is drawn (colour, line style); shadow rays by what reaches the point
 RAY_STYLE = {"camera": ("white", "-"), "reflection": ("#33d6ff", "-"), "refraction": ("#ff5ce1", "-"),
@@ -433,7 +433,7 @@ def ray_tree(data: dict[str, Any], pixels: list[tuple[int, int]], size: tuple[in
     miss), ``hit`` (bool), ``parent`` (the index of the ray whose hit cast it), ``depth``, ``material`` at the
     hit, and for a shadow ray ``through`` (the RGB factor of light that gets through).
     """
-    from ..raytrace import build
+    from ..tracescene import build
     stage, impl = get_stage("whitted"), _impl("whitted")
     scene = parse_scene(data, "<ray tree>")
     origins, directions = stage.call(impl, "W1", scene.camera, *size)

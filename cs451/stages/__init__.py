@@ -2,7 +2,7 @@
 
 Every module in this package except ``base`` and the private helpers (``_*.py``) is a
 stage and defines ``STAGE``; the registry finds a new stage by its module alone. The rest
-a stage needs (reference, specs, handout) is listed in docs/ARCHITECTURE.md.  Modules are imported
+a stage needs (reference, specs, handout) is listed in docs/adding-a-stage.md.  Modules are imported
 lazily because each stage pulls in its own GL or numba machinery.
 """
 from __future__ import annotations

@@ -41,7 +41,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .. import raytrace
+from .. import tracescene
 from ..demos.frames import captioned
 from ..demos.player import Event, play
 from ..imageio import to_uint8
@@ -77,7 +77,7 @@ class Settings:
 @dataclass
 class _Render:
     """A picture refining under one setting: the scene it traces (with its counters), the image, how far it got."""
-    scene: raytrace.TraceScene
+    scene: tracescene.TraceScene
     image: np.ndarray
     pos: int = 0
     level: int = 0
@@ -344,10 +344,10 @@ class WhittedDemo:
         self.render = self.renders[settings]
         self._frame = None
 
-    def scene_for(self, s: Settings) -> raytrace.TraceScene:
+    def scene_for(self, s: Settings) -> tracescene.TraceScene:
         """The traced scene under ``s``: materials and limits changed, the geometry and hierarchy shared, counters 0."""
         ts = dataclasses.replace(self.base, max_depth=s.depth, min_weight=self.opts.min_weight if s.cutoff else 0.0,
-                                 counters={k: 0 for k in raytrace.COUNTERS})
+                                 counters={k: 0 for k in tracescene.COUNTERS})
         if not s.reflection:
             ts.mat_reflectance = np.zeros_like(ts.mat_reflectance)
             ts.mat_fresnel = np.zeros_like(ts.mat_fresnel)

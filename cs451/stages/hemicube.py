@@ -15,7 +15,7 @@ from typing import Any, Literal
 import numpy as np
 
 from .. import schema
-from ..scene import AreaLight, Polygon, Scene, parse_scene
+from ..scene import AreaLight, Polygon, Scene
 from ..schema import Context, field
 from .base import Out, Probes, Stage, Task
 
@@ -186,14 +186,6 @@ def probe_rows(impl: Any, quads: list, rows: list[int], resolution: int = 128, r
     from ..formfactors import HemicubeFormFactors
     ff = HemicubeFormFactors(_quads(quads), calls(impl), resolution=resolution, rotate=rotate, proximity=proximity, seed=seed)
     return {"rows": ff.rows(list(rows))}
-
-
-@PROBES.register
-def probe_scene_rows(impl: Any, scene: dict, rows: list[int], resolution: int = 64,
-                     proximity: str = "none") -> dict[str, np.ndarray]:
-    from ..patches import scene_polygons
-    quads, _, _ = scene_polygons(parse_scene(scene, "<probe scene>"))
-    return probe_rows(impl, quads.tolist(), rows, resolution=resolution, proximity=proximity)
 
 
 @PROBES.register

@@ -1,7 +1,7 @@
 """Stage 2, Whitted ray tracing: its interface, and the scaffolding that renders with a student's functions.
 
 The scaffolding holds no solution: it turns a scene into arrays
-(:mod:`cs451.raytrace`), asks the submission for a hierarchy when one can pay off,
+(:mod:`cs451.tracescene`), asks the submission for a hierarchy when one can pay off,
 then for camera rays and their colours, and averages supersamples into pixels.
 Everything a student writes is called through :data:`STAGE`, and checked.
 """
@@ -13,7 +13,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .. import raytrace, schema
+from .. import tracescene, schema
 from ..errors import KitError
 from ..scene import AreaLight, Camera, Mesh, Plane, PointLight, Polygon, Scene, Sphere, parse_scene
 from ..schema import Context, field
@@ -85,23 +85,23 @@ def _build_bvh(impl: Any, lo: np.ndarray, hi: np.ndarray) -> dict[str, np.ndarra
 
 def prepare(scene: Scene, impl: Any, max_depth: int | None = None, min_weight: float | None = None,
             light_samples: int | None = None, hierarchy: bool | None = None,
-            bvh: dict[str, np.ndarray] | None = None) -> raytrace.TraceScene:
+            bvh: dict[str, np.ndarray] | None = None) -> tracescene.TraceScene:
     """The scene as arrays, with the submission's hierarchy where it can pay off (or where ``hierarchy``).
 
     ``bvh``: a trusted hierarchy (the reference's, from the grader) to use instead of the submission's W4.
     """
     opts = STAGE.options(scene, max_depth=max_depth, min_weight=min_weight, light_samples=light_samples)
-    ts = raytrace.build(scene, opts.max_depth, opts.min_weight, opts.light_samples or None)
-    use = hierarchy if hierarchy is not None else ts.n_bounded > raytrace.HIERARCHY_THRESHOLD
+    ts = tracescene.build(scene, opts.max_depth, opts.min_weight, opts.light_samples or None)
+    use = hierarchy if hierarchy is not None else ts.n_bounded > tracescene.HIERARCHY_THRESHOLD
     if bvh is not None:
-        ts.bvh = {k: np.asarray(bvh[k]) for k in raytrace.BVH_KEYS}
+        ts.bvh = {k: np.asarray(bvh[k]) for k in tracescene.BVH_KEYS}
     elif use and ts.n_bounded > 0:
         lo, hi = ts.bounds()
         bvh = _build_bvh(impl, lo, hi)
-        problems = raytrace.bvh_problems(bvh, lo, hi)
+        problems = tracescene.bvh_problems(bvh, lo, hi)
         if problems:
             raise KitError(f"W4 build_bvh(): {problems[0]}")
-        ts.bvh = {k: np.asarray(bvh[k]) for k in raytrace.BVH_KEYS}
+        ts.bvh = {k: np.asarray(bvh[k]) for k in tracescene.BVH_KEYS}
     return ts
 
 
@@ -132,7 +132,7 @@ def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, **opts:
 # those arrays wherever it asks what the reference asked (a correct trace asks exactly that), and
 # left to the submission's own functions elsewhere: a bug in W8 then costs W8's points only.
 
-BVH_GIVEN = {k: f"bvh_{k}" for k in raytrace.BVH_KEYS}
+BVH_GIVEN = {k: f"bvh_{k}" for k in tracescene.BVH_KEYS}
 #: Per optics task: the per-ray arrays of a query and of its answer (given as answer_<function>_<name>),
 #: and whether each holds a vector (3 columns) per ray.
 OPTICS = {"W8": ((("d", 3), ("n", 3)), (("r", 3),)), "W9": ((("d", 3), ("n", 3), ("eta", 1)), (("t", 3), ("tir", 1))),
@@ -266,20 +266,20 @@ def probe_intersect_triangle(impl: Any, origins: list, directions: list, v0: lis
 def probe_build_bvh(impl: Any, lo: list | None = None, hi: list | None = None, scene: dict | None = None) -> dict[str, np.ndarray]:
     """The submission's hierarchy over boxes given as lists, or over a scene's primitives."""
     if scene is not None:
-        ts = raytrace.build(_scene(scene))
+        ts = tracescene.build(_scene(scene))
         lo_a, hi_a = ts.bounds()
     else:
         lo_a, hi_a = np.asarray(lo, float).reshape(-1, 3), np.asarray(hi, float).reshape(-1, 3)
     bvh = _build_bvh(impl, lo_a, hi_a)
     out = {"box_lo": lo_a, "box_hi": hi_a}
-    for k in raytrace.BVH_KEYS:
+    for k in tracescene.BVH_KEYS:
         if k not in bvh:
-            raise KitError(f"W4 build_bvh() returned no {k!r} (keys needed: {', '.join(raytrace.BVH_KEYS)})")
+            raise KitError(f"W4 build_bvh() returned no {k!r} (keys needed: {', '.join(tracescene.BVH_KEYS)})")
         out[k] = np.asarray(bvh[k])
     return out
 
 
-def _hits(impl: Any, ts: raytrace.TraceScene, o: np.ndarray, d: np.ndarray) -> dict[str, np.ndarray]:
+def _hits(impl: Any, ts: tracescene.TraceScene, o: np.ndarray, d: np.ndarray) -> dict[str, np.ndarray]:
     t, prim, normals = STAGE.call(impl, "W5", ts, o, d)
     return {"t": t, "prim": prim, "normals": normals}
 

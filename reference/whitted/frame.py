@@ -1,13 +1,13 @@
 """The reference's compiled W11: a whole frame's recursion in one kernel (``kernels.frame``), so that no
 per-bounce bookkeeping runs in numpy. ``tracer.trace`` hands large batches here; both give the same
-colours to rounding and the same counters (``tests/test_whitted_frame.py``). Students' copies are empty.
+colours to rounding and the same counters (``tests/test_whitted_frame.py``). A student's starter has no copy of it.
 """
 # BEGIN SOLUTION
 from __future__ import annotations
 
 import numpy as np
 
-from cs451.raytrace import SPAWN_OFFSET, TraceScene
+from cs451.tracescene import SPAWN_OFFSET, TraceScene
 
 from . import kernels as K
 from .hierarchy import closest_args, packed

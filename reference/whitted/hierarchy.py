@@ -1,7 +1,7 @@
 """The reference's hierarchy, built once per geometry: a binned-SAH build and the eight-wide layout the
 compiled kernels traverse, both in numba, each kept in a small cache keyed by a digest of the arrays it
 was made from (so renders and demo frames of the same geometry build nothing), with counts of what was
-built and what was reused. Students' copies of this file are empty.
+built and what was reused. A student's starter has no copy of it.
 """
 # BEGIN SOLUTION
 from __future__ import annotations
@@ -13,7 +13,7 @@ from typing import Any, Callable
 import numpy as np
 from numba import njit
 
-from cs451.raytrace import TraceScene, content_key
+from cs451.tracescene import TraceScene, content_key
 
 from .running import compiled
 

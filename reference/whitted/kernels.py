@@ -5,7 +5,7 @@ Written per ray, in float64 (the hierarchy's boxes aside: tested in float32, wid
 bound), and run on chunks of rays in threads (``nogil``, see ``running.py``).
 A clear numpy solution does not need this file: it is how the reference reaches Embree-like speeds
 (see ``bench/whitted.py``). The frame kernel lives here with the traversal it inlines because numba's
-cache checks only the file a kernel is defined in. Students' copies of it are empty.
+cache checks only the file a kernel is defined in. A student's starter has no copy of it.
 """
 # BEGIN SOLUTION
 from __future__ import annotations
@@ -703,7 +703,7 @@ L_POS, L_DIFFUSE, L_SPECULAR, L_ATT, L_NORMAL, L_AREA, L_WIDTH = 0, 3, 6, 9, 12,
 
 @njit(**_INLINE)
 def _spawn(px, py, pz, nx, ny, nz, dx, dy, dz, offset):
-    """``cs451.raytrace.spawn`` for one ray: off the surface by (1 + max|p|)·offset to the side it leaves by."""
+    """``cs451.tracescene.spawn`` for one ray: off the surface by (1 + max|p|)·offset to the side it leaves by."""
     side = nx * dx + ny * dy + nz * dz
     s = 1.0 if side >= 0.0 else -1.0     # sign(0) counts as +1, as spawn does
     scale = (1.0 + max(abs(px), abs(py), abs(pz))) * offset

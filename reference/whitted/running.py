@@ -1,5 +1,5 @@
 """Running the reference's compiled kernels: compiled once (numba's on-disk cache keeps them for later
-runs, and the first compile says so), then over chunks of rays in threads. Students' copies are empty.
+runs, and the first compile says so), then over chunks of rays in threads. A student's starter has no copy of it.
 """
 # BEGIN SOLUTION
 from __future__ import annotations

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cs451.raytrace import TraceScene
+from cs451.tracescene import TraceScene
 
 from .intersect import intersect_sphere, intersect_triangle
 

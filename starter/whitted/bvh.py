@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cs451.raytrace import TraceScene
+from cs451.tracescene import TraceScene
 
 LEAF_SIZE = 4   # split every node of more primitives than this; a leaf may hold at most 8 (handout §W4)
 

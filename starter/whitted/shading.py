@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cs451.raytrace import TraceScene
+from cs451.tracescene import TraceScene
 
 
 def local_shading(normals, to_eye, to_light, light_diffuse, light_specular, diffuse, specular, shininess) -> np.ndarray:

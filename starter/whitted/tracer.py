@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cs451.raytrace import TraceScene, spawn
+from cs451.tracescene import TraceScene, spawn
 
 from .bvh import closest_hit
 from .optics import fresnel, reflect, refract

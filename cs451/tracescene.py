@@ -216,7 +216,7 @@ def _read_mesh(path: Path, where: str) -> tuple[np.ndarray, np.ndarray]:
 
 def build(scene: Any, max_depth: int = 5, min_weight: float = 0.01, light_samples: int | None = None) -> TraceScene:
     """The arrays of ``scene`` (a validated Scene). ``light_samples`` overrides every area light's count."""
-    from .scene import AreaLight, DirectionalLight, Mesh, PointLight, Plane, Polygon, Sphere
+    from .scene import AreaLight, Mesh, PointLight, Plane, Polygon, Sphere
     label = scene.label
     names = ["default"] + sorted(k for k in scene.materials if k != "default")
     index = {n: i for i, n in enumerate(names)}
