@@ -15,7 +15,7 @@ from types import ModuleType
 
 from cs451.demos.player import STEP_SECONDS
 from cs451.progress import Progress
-from cs451.stages._whitted_demo import WhittedDemo
+from cs451.stages.whitted.demo import WhittedDemo
 
 from .whitted_frames import SIZE
 

@@ -12,9 +12,22 @@ __version__ = "0.1.0"
 
 #: The engine's own folder (what the grader copies into a sandbox and a release ships).
 ENGINE_DIR = Path(__file__).resolve().parent
-#: Engine folders only lecturers use (the slides' builder, its vendored reveal.js and KaTeX, the figures it draws
-#: from the reference): never in a student release or a grading sandbox, and not part of the answers' version.
+#: Engine folders only lecturers use (the slides' builder, its vendored reveal.js and KaTeX): never in a student
+#: release or a grading sandbox, and not part of the answers' version. A stage's own deck figures
+#: (``stages/<stage>/figures.py``, ``figure_*.py``) are lecturers' too: see :func:`lecturer_only`.
 LECTURER_ONLY = ("slides",)
+
+
+def lecturer_only(path: Path) -> bool:
+    """Whether a file or folder of the engine is only for lecturers (the slides, and every stage's deck figures,
+    which draw from the reference): left out of releases, sandboxes and the answers' version."""
+    try:
+        parts = path.resolve().relative_to(ENGINE_DIR).parts
+    except ValueError:
+        return False
+    if parts and parts[0] in LECTURER_ONLY:
+        return True
+    return len(parts) == 3 and parts[0] == "stages" and (parts[2] == "figures.py" or parts[2].startswith("figure_"))
 
 
 def _kit_root() -> Path:

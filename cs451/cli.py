@@ -204,6 +204,20 @@ def _cmd_release(a: argparse.Namespace) -> int:
     return 0
 
 
+
+def _demo_options(stages: list[str]) -> dict[str, tuple[str, str]]:
+    """For --scene, --size and --screenshot: the demos that take each (asked of each stage's demo, by its
+    parameters), and their default scenes."""
+    import inspect
+    from .stages import get_stage
+    out = {}
+    for option in ("scene", "size", "screenshot"):
+        params = {name: inspect.signature(get_stage(name).demo).parameters for name in stages if get_stage(name).demo}
+        takers = [name for name, p in params.items() if option in p]
+        defaults = [str(params[name][option].default) for name in takers]
+        out[option] = (", ".join(takers) or "no demo here", ", ".join(defaults))
+    return out
+
 def build_parser() -> argparse.ArgumentParser:
     """The commands of this copy: a student's copy (``cs451 release``) has only the student's."""
     from .copy import student_stage
@@ -260,12 +274,13 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("-o", "--output", default="demo", help="folder for the images when there is no display (default: demo)")
     d.add_argument("--window", action="store_true", help="open a window even if no display is detected")
     d.add_argument("--no-window", action="store_true", help="write images even if there is a display")
+    takes = _demo_options(stages)
     d.add_argument("--frames", type=int, help="close the window after this many frames (for scripted demos); "
-                                             "without a window (whitted, hemicube), write only the first that many")
-    d.add_argument("--scene", help="whitted, hemicube: a bundled scene or scene file (default: whitted, cornell-box)")
-    d.add_argument("--size", help="whitted, hemicube: WIDTHxHEIGHT of the picture, overriding the scene's")
-    d.add_argument("--screenshot", help="whitted, hemicube: in the window, play the frames' script, save the window "
-                                        "as the display shows it to this PNG, and close")
+                                             f"without a window ({takes['scene'][0]}), write only the first that many")
+    d.add_argument("--scene", help=f"{takes['scene'][0]}: a bundled scene or scene file (default: {takes['scene'][1]})")
+    d.add_argument("--size", help=f"{takes['size'][0]}: WIDTHxHEIGHT of the picture, overriding the scene's")
+    d.add_argument("--screenshot", help=f"{takes['screenshot'][0]}: in the window, play the frames' script, save the "
+                                        "window as the display shows it to this PNG, and close")
     d.set_defaults(func=_cmd_demo)
 
     sc = sub.add_parser("scenes", help="list the bundled scenes", description="List the bundled scenes.")
@@ -337,7 +352,7 @@ def build_parser() -> argparse.ArgumentParser:
                                     "the reference's figures inside: they open offline.")
     slsub = sl.add_subparsers(dest="action", required=True, metavar="ACTION")
     slb = slsub.add_parser("build", help="build one deck or all of them")
-    slb.add_argument("deck", nargs="?", help="overview, sphere, whitted, hemicube or radiosity (default: all)")
+    slb.add_argument("deck", nargs="?", help=f"overview, {', '.join(stages)} (default: all)")
     slb.add_argument("-o", "--output", required=True, help="folder for the HTML files (one per deck)")
     slb.add_argument("--cache", help="folder for the rendered figures (default: .cs451-cache/slides in the kit)")
     slb.add_argument("--quick", action="store_true", help="small, fast figures (drafts)")

@@ -28,11 +28,11 @@ from typing import Any
 
 import numpy as np
 
-from .. import schema
-from ..errors import KitError
-from ..scene import AreaLight, Polygon, Scene
-from ..schema import field
-from .base import Out, Probes, Stage, Task
+from ... import schema
+from ...errors import KitError
+from ...scene import AreaLight, Polygon, Scene
+from ...schema import field
+from ..base import Out, Probes, Stage, Task
 
 TASKS = (Task("T1", "scale", "Scaling a colour", ("values", "factor"), (Out("scaled", ("len(values)",)),)),)
 
@@ -112,7 +112,7 @@ Return `values` times `factor`.
 
 #: every file the recipe names for a stage called "toy" (the starter is derived by `cs451 starter`)
 RECIPE = {
-    "cs451/stages/toy.py": TOY_STAGE,
+    "cs451/stages/toy/__init__.py": TOY_STAGE,
     "reference/toy/__init__.py": "from .scale import scale\n",
     "reference/toy/scale.py": TOY_REFERENCE,
     "autograder/toy/__init__.py": "",
@@ -184,7 +184,7 @@ def test_the_toy_stage_renders_and_grades_from_the_command_line(kit_with_toy_sta
 
 def test_no_engine_module_imports_a_stage_module():
     """The engine (everything in cs451/ but stages/) may use the registry, never a particular stage."""
-    stage_modules = {p.stem for p in (KIT_ROOT / "cs451" / "stages").glob("*.py")} - {"__init__", "base"}
+    stage_modules = {p.name for p in (KIT_ROOT / "cs451" / "stages").iterdir() if (p / "__init__.py").is_file()}
     offenders = []
     for path in (KIT_ROOT / "cs451").rglob("*.py"):
         if "stages" in path.relative_to(KIT_ROOT / "cs451").parts:
@@ -210,3 +210,63 @@ def test_the_architecture_documents_name_modules_that_exist():
     for name in set(re.findall(r"`((?:stages|grading|packaging|demos|formfactors)/[\w.]+?)`", text)):
         if "<" not in name:
             assert (KIT_ROOT / "cs451" / name).exists() or (KIT_ROOT / "cs451" / (name + ".py")).exists(), name
+
+
+def test_no_module_outside_a_stage_package_names_a_stage():
+    """The engine and the tools ask the registry; a stage's name as a literal lives only in its own package
+    (and in the package of a stage that builds on it). A scene kind registered by name ("sphere") is the scene
+    format's word, not a stage's."""
+    import re
+    names = "|".join(p.name for p in (KIT_ROOT / "cs451" / "stages").iterdir() if (p / "__init__.py").is_file())
+    literal = re.compile(rf"""["']({names})["']""")
+    offenders = []
+    for path in (KIT_ROOT / "cs451").rglob("*.py"):
+        rel = path.relative_to(KIT_ROOT / "cs451")
+        if rel.parts[0] == "stages" and len(rel.parts) > 2:
+            continue
+        tree = ast.parse(path.read_text())
+        kinds = {id(arg) for node in ast.walk(tree) if isinstance(node, ast.Call)           # scene kinds ("sphere")
+                 and isinstance(node.func, ast.Attribute) and node.func.attr == "register" for arg in node.args}
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) and literal.fullmatch(repr(node.value)) \
+                    and id(node) not in kinds:
+                offenders.append(f"{rel}:{node.lineno}: {node.value!r}")
+    assert not offenders, offenders
+
+
+def test_the_engine_has_no_import_cycle():
+    """No import cycle between the modules of cs451/ (function-level imports included), measured on the source."""
+    graph: dict[str, set[str]] = {}
+    root = KIT_ROOT / "cs451"
+    modules = {".".join(("cs451", *p.relative_to(root).with_suffix("").parts)).removesuffix(".__init__"): p
+               for p in root.rglob("*.py")}
+    for name, path in modules.items():
+        package = name if path.name == "__init__.py" else name.rsplit(".", 1)[0]
+        targets = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom):
+                base = package
+                for _ in range(max(node.level - 1, 0)):
+                    base = base.rsplit(".", 1)[0]
+                mod = (f"{base}.{node.module}" if node.module else base) if node.level else (node.module or "")
+                for alias in node.names:
+                    sub = f"{mod}.{alias.name}"
+                    targets.add(sub if sub in modules else mod)
+            elif isinstance(node, ast.Import):
+                targets |= {a.name for a in node.names}
+        graph[name] = {t for t in targets if t in modules and t != name}
+    cycles, state = [], {}
+
+    def visit(node: str, stack: list[str]) -> None:
+        state[node] = 1
+        for nxt in sorted(graph[node]):
+            if state.get(nxt) == 1:
+                cycles.append(stack[stack.index(nxt):] + [nxt] if nxt in stack else [node, nxt])
+            elif nxt not in state:
+                visit(nxt, stack + [nxt])
+        state[node] = 2
+    for node in sorted(graph):
+        if node not in state:
+            visit(node, [node])
+    assert not cycles, "\n".join(" -> ".join(c) for c in cycles[:10])
+

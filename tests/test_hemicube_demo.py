@@ -20,7 +20,7 @@ from cs451.imageio import load_png
 from cs451.patches import scene_polygons
 from cs451.scene import load_scene
 from cs451.stages import hemicube as H
-from cs451.stages._hemicube_demo import HemicubeDemo
+from cs451.stages.hemicube.demo import HemicubeDemo
 
 from demo_windows import XVFB, live_window_result, needs_xvfb
 
@@ -155,7 +155,7 @@ LIVE = textwrap.dedent("""
     from cs451.demos import window as W
     from cs451.demos.player import play
     from cs451.impl import load_impl
-    from cs451.stages._hemicube_demo import HemicubeDemo
+    from cs451.stages.hemicube.demo import HemicubeDemo
 
     demo = HemicubeDemo(load_impl(Path(sys.argv[1]), "hemicube"))
     seen = {"patches": []}

@@ -64,7 +64,7 @@ def test04_one_broken_function_loses_its_task_and_what_calls_it(make_submission,
 
 
 def test05_demo_writes_frames_and_an_animation(tmp_path):
-    from cs451.stages._radiosity_demo import demo
+    from cs451.stages.radiosity.demo import demo
     paths = demo(REF, tmp_path, window=False, frames=4, scene_name="furnace", size=(48, 48))
     assert paths[0].name == "radiosity.gif" and len(paths) == 1 + 5          # 4 frames after shots, and the answer
     with Image.open(paths[0]) as gif:

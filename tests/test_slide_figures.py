@@ -15,7 +15,8 @@ from PIL import Image
 
 from cs451 import KIT_ROOT
 from cs451.errors import KitError
-from cs451.slides import figures
+from cs451.slides import canvas, figures, registry
+from cs451.stages.whitted import figure_rays as whitted_rays
 from cs451.stages import stage_names
 
 QUICK = True
@@ -113,14 +114,14 @@ def test03_a_changed_reference_function_changes_the_key_and_the_figure(tmp_path:
     right = figures.render_figure("hemicube-delta-weights", cache, quick=QUICK)
     assert heat_map_error(right, "top") < 1 / 128
     right_pixels = pixels(right)
-    monkeypatch.setattr(figures, "REFERENCE", reference_copy(make_submission, "same"))
+    monkeypatch.setattr(registry, "REFERENCE", reference_copy(make_submission, "same"))
     assert {name: figures.figure_key(name, QUICK) for name in figures.FIGURES} == before   # a copy is the same code
-    monkeypatch.setattr(figures, "REFERENCE", reference_copy(make_submission, "wrong", (
+    monkeypatch.setattr(registry, "REFERENCE", reference_copy(make_submission, "wrong", (
         "hemicube", "tables.py", "top = area / (np.pi * (x * x + y * y + 1.0) ** 2)",
         "top = area / (np.pi * (x * x + y * y + 1.0) ** 3)")))
     after = {name: figures.figure_key(name, QUICK) for name in figures.FIGURES}
     changed = {name for name in figures.FIGURES if after[name] != before[name]}
-    uses_h1 = {name for name, spec in figures._SPECS.items() if "hemicube" in spec.stages}
+    uses_h1 = {name for name, spec in registry.SPECS.items() if "hemicube" in spec.stages}
     assert changed == uses_h1
     assert {"hemicube-delta-weights", "hemicube-row", "whitted-ray-tree"} <= changed
     assert not changed & {"sphere-gouraud-vs-phong", "bench-whitted", "radiosity-progress"}
@@ -186,8 +187,8 @@ def test09_the_ray_tree_obeys_the_mirror_law_and_snell(cache: Path) -> None:
     assert np.abs(np.subtract(facts["first_hit_pixel"], facts["pixel"])).max() < 0.5   # W1 against the projection
     assert facts["rays"]["camera"] == 1 and facts["materials"][0] == "glass"
     assert min(facts["rays"][k] for k in ("reflection", "refraction", "shadow")) >= 1
-    data = figures._scene_data("whitted.json")
-    rays = figures.ray_tree(data, [tuple(facts["pixel"])], (80, 60))
+    data = canvas.scene_data("whitted.json")
+    rays = whitted_rays.ray_tree(data, [tuple(facts["pixel"])], (80, 60))
     camera = rays[0]
     d, n = camera["direction"], camera["normal"]
     assert d @ n < 0                                            # it enters the glass

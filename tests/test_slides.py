@@ -296,15 +296,8 @@ def test09_the_command_builds_a_deck_and_refuses_bad_input_in_one_line(tmp_path,
 # --- the real figures module's side of the contract ------------------------------------------------------
 
 def _real_figures():
-    try:
-        import importlib
-        importlib.import_module("cs451.slides.figures")
-    except ImportError as err:
-        pytest.skip(f"cs451/slides/figures.py is not importable yet ({err})")
-    module = sys.modules["cs451.slides.figures"]
-    if not (hasattr(module, "FIGURES") and hasattr(module, "render_figure")):
-        pytest.skip("cs451/slides/figures.py has no FIGURES and render_figure yet")
-    return module
+    from cs451.slides import figures
+    return figures
 
 
 def test10_the_figures_module_knows_every_figure_the_decks_show():
@@ -314,12 +307,11 @@ def test10_the_figures_module_knows_every_figure_the_decks_show():
 
 
 def test11_a_changed_reference_function_changes_a_real_figures_cache_key(tmp_path, monkeypatch):
+    from cs451.slides import registry
     figures = _real_figures()
-    if not hasattr(figures, "figure_key") or not hasattr(figures, "REFERENCE"):
-        pytest.skip("figures.py has no figure_key/REFERENCE to point at a copy of the reference")
     reference = tmp_path / "reference"
     shutil.copytree(KIT_ROOT / "reference", reference, ignore=shutil.ignore_patterns("__pycache__"))
-    monkeypatch.setattr(figures, "REFERENCE", reference)
+    monkeypatch.setattr(registry, "REFERENCE", reference)
     before = {name: figures.figure_key(name) for name in ("hemicube-delta-weights", "sphere-gouraud-vs-phong")}
     tables = reference / "hemicube" / "tables.py"
     tables.write_text(tables.read_text().replace("h = 2.0 / r", "h = 2.0 / float(r)"))

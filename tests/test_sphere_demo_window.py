@@ -20,7 +20,8 @@ SCRIPT = textwrap.dedent("""
     import glfw
     from cs451.demos import window as W
     from cs451.impl import load_impl
-    from cs451.stages import _sphere_demo, sphere as s1
+    from cs451.stages import sphere as s1
+    from cs451.stages.sphere import demo as _sphere_demo
 
     seen, sizes = {}, []
     own_keys = W.Window.keys

@@ -134,7 +134,7 @@ def test07_hierarchy_is_valid_and_agrees_with_brute_force(ref):
 
 
 def test08_bundled_mesh_is_what_the_code_makes():
-    from cs451.stages import _whitted_mesh
+    from cs451.stages.whitted import mesh as _whitted_mesh
     assert _whitted_mesh.TORUS_OBJ.read_text() == _whitted_mesh.obj_text()
     mesh = _whitted_mesh.rippled_torus()
     assert len(mesh.faces) >= 50_000 and mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0

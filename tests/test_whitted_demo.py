@@ -17,7 +17,7 @@ from cs451 import KIT_ROOT
 from cs451.compare import compare_images
 from cs451.impl import load_impl
 from cs451.imageio import load_png
-from cs451.stages._whitted_demo import WhittedDemo, next_piece, progressive_order
+from cs451.stages.whitted.demo import WhittedDemo, next_piece, progressive_order
 
 from demo_windows import XVFB, live_window_result, needs_xvfb
 
@@ -141,7 +141,7 @@ LIVE = textwrap.dedent("""
     from cs451.demos import window as W
     from cs451.demos.player import play
     from cs451.impl import load_impl
-    from cs451.stages._whitted_demo import WhittedDemo
+    from cs451.stages.whitted.demo import WhittedDemo
 
     demo = WhittedDemo(load_impl(Path(sys.argv[1]), "whitted"), "whitted", (40, 30))
     x, y = demo.default_pixel()

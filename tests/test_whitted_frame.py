@@ -242,7 +242,7 @@ def test11_mitsuba_is_handed_the_same_camera_and_geometry(ref, tmp_path):
 
 
 def test12_the_bench_times_the_demo_to_a_finished_picture(ref):
-    from cs451.stages._whitted_demo import WhittedDemo, progressive_order
+    from cs451.stages.whitted.demo import WhittedDemo, progressive_order
     demo = WhittedDemo(ref, "whitted", (40, 30))
     seconds, shown = bench_module("whitted_demo")._refine(demo)
     assert not demo.busy() and seconds > 0

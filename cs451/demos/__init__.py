@@ -22,7 +22,7 @@ def has_display() -> bool:
     return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
-def run_demo(*, stage: str = "sphere", impl: str = "reference", output: str | Path = "demo",
+def run_demo(*, stage: str, impl: str = "reference", output: str | Path = "demo",
              window: bool | None = None, frames: int | None = None, scene: str | None = None,
              size: str | tuple[int, int] | None = None, screenshot: str | Path | None = None) -> list[Path]:
     """Open the window (``window=None``: when there is a display) or write the demo's frames to ``output``.

@@ -18,8 +18,9 @@ from typing import Any
 
 import numpy as np
 
-from .. import ENGINE_DIR, KIT_ROOT, LECTURER_ONLY
+from .. import ENGINE_DIR, KIT_ROOT, lecturer_only
 from ..errors import KitError
+from .probes import run_trusted_probe
 from .spec import TRUTH_MODULES, Outputs, Ref, Test
 
 
@@ -28,9 +29,8 @@ def tree_hash(*folders: Path) -> str:
     computed when an autograder is built stay valid where it is unpacked."""
     h = hashlib.sha256()
     for folder in folders:
-        skip = LECTURER_ONLY if folder.resolve() == ENGINE_DIR else ()     # no answer comes from the slides
-        for path in sorted(folder.rglob("*.py")):
-            if "__pycache__" not in path.parts and path.relative_to(folder).parts[0] not in skip:
+        for path in sorted(folder.rglob("*.py")):      # no answer comes from the slides or a deck's figures
+            if "__pycache__" not in path.parts and not lecturer_only(path):
                 h.update(path.relative_to(folder).as_posix().encode())
                 h.update(path.read_bytes())
     return h.hexdigest()[:16]
@@ -105,7 +105,6 @@ class ReferenceAnswers:
         if self.impl is None:
             raise KitError(f"this copy of the kit has no reference answer for probe {probe!r} "
                            f"(its answers in {self.dir} are older than the test; ask for an updated copy)")
-        from .runner import run_trusted_probe  # the runner imports this module
         result = run_trusted_probe(self.stage, self.impl, probe, params, inputs, timeout=300)
         if not result.ok:
             raise KitError(f"the reference failed on probe {probe} {params}: {result.error}\n{result.output}")

@@ -53,7 +53,7 @@ try:  # not on Windows: there the student copy runs without limits (nothing to p
 except ImportError:  # pragma: no cover
     resource = None  # type: ignore[assignment]
 
-from .. import ENGINE_DIR, LECTURER_ONLY
+from .. import lecturer_only
 from ..errors import KitError
 from . import cgroups
 from .staging import StagedUpload, stage_upload
@@ -84,9 +84,7 @@ DESCRIPTIONS = {
 def _sandbox_litter(folder: str, names: list[str]) -> set[str]:
     """What a sandbox's copy of the engine leaves out: byte code, and the lecturers' folders (no test imports them)."""
     left = set(shutil.ignore_patterns("*.pyc", "__pycache__")(folder, names))
-    if Path(folder).resolve() == ENGINE_DIR:
-        left |= set(LECTURER_ONLY) & set(names)
-    return left
+    return left | {name for name in names if lecturer_only(Path(folder) / name)}
 
 
 class IsolationError(KitError):

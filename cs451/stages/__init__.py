@@ -1,9 +1,8 @@
 """The registry of stages, found by name (as pbrt-v4 creates shapes by name in one factory).
 
-Every module in this package except ``base`` and the private helpers (``_*.py``) is a
-stage and defines ``STAGE``; the registry finds a new stage by its module alone. The rest
-a stage needs (reference, specs, handout) is listed in docs/adding-a-stage.md.  Modules are imported
-lazily because each stage pulls in its own GL or numba machinery.
+Every package here (``stages/<name>/``) is a stage and defines ``STAGE`` in its ``__init__``; the registry finds
+a new stage by its package alone. The rest a stage needs (reference, specs, handout) is listed in
+docs/adding-a-stage.md. Stages are imported lazily because each pulls in its own GL or numba machinery.
 """
 from __future__ import annotations
 

@@ -9,6 +9,7 @@ in the engine.
 """
 from __future__ import annotations
 
+import importlib
 import inspect
 import sys
 from contextlib import contextmanager
@@ -70,6 +71,8 @@ class Stage:
     probes: dict[str, Callable[..., dict[str, np.ndarray]]] = field(default_factory=dict)
     #: demo(module, output: Path, window: bool, frames: int | None) -> list[Path] of files written (none in a window)
     demo: Callable[..., list] | None = None
+    #: the demo's keys, (key, what it does), in the order the window title and ``cs451 demo --help`` list them
+    demo_keys: tuple[tuple[str, str], ...] = ()
     #: earlier stages whose implementation this stage's engine runs (radiosity: the hemicube), see :meth:`trusted`;
     #: never in a grading sandbox, where the tests pass that stage's results in as arrays (``Test.given``)
     builds_on: tuple[str, ...] = ()
@@ -278,3 +281,9 @@ def functions_replaced(stage: Stage, impl: Any, wrappers: dict[str, Callable[[An
     finally:
         for module, attr, value in changed:
             setattr(module, attr, value)
+
+
+def part(package: str, name: str) -> ModuleType:
+    """A module of a stage's package loaded by name when first asked for (its demo, its diagrams): they load GLFW
+    and window loops a render never needs, and since the stage never imports them they may import the stage."""
+    return importlib.import_module(f"{package}.{name}")

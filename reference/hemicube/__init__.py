@@ -1,7 +1,7 @@
 """Stage 3, hemi-cube form factors: the functions you write, gathered for the kit to call.
 
 The kit imports this package and calls only the names below (see
-``cs451/stages/hemicube.py`` for the interface and ``cs451/formfactors/``
+``cs451/stages/hemicube/__init__.py`` for the interface and ``cs451/formfactors/``
 for the engine that renders hemicubes with them). Keep them.
 """
 from .contour import point_polygon_form_factor

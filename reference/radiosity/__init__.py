@@ -1,7 +1,7 @@
 """Stage 4, progressive refinement radiosity: the functions you write, gathered for the kit to call.
 
 The kit imports this package and calls only the names below (see
-``cs451/stages/radiosity.py`` for the interface). Keep them.
+``cs451/stages/radiosity/__init__.py`` for the interface). Keep them.
 """
 from .display import vertex_colors
 from .patches import subdivide

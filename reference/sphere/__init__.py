@@ -1,7 +1,7 @@
 """Stage 1, the lit sphere: the functions you write, gathered for the kit to call.
 
 The kit imports this package and calls only the names below (see
-``cs451/stages/sphere.py`` for the interface). Keep them.
+``cs451/stages/sphere/__init__.py`` for the interface). Keep them.
 """
 from .camera import look_at, perspective, reshape
 from .controls import handle_key

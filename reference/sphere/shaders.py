@@ -1,7 +1,7 @@
 """S5, S6: shaders that reproduce OpenGL 1.x fixed-function lighting.
 
 The kit puts ``#version 330`` and the declarations of every uniform and input
-in front of your source (see ``GLSL_INTERFACE`` in ``cs451/stages/sphere.py``):
+in front of your source (see ``GLSL_INTERFACE`` in ``cs451/stages/sphere/__init__.py``):
 the vertex shader receives ``in_position`` and ``in_normal`` in object space;
 the fragment shader writes ``frag_color``.
 """

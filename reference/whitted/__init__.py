@@ -1,7 +1,7 @@
 """Stage 2, Whitted ray tracing: the functions you write, gathered for the kit to call.
 
 The kit imports this package and calls only the names below (see
-``cs451/stages/whitted.py`` for the interface). Keep them.
+``cs451/stages/whitted/__init__.py`` for the interface). Keep them.
 """
 from .bvh import build_bvh, closest_hit
 from .camera import camera_rays

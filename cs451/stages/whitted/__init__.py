@@ -13,11 +13,11 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .. import tracescene, schema
-from ..errors import KitError
-from ..scene import AreaLight, Camera, Mesh, Plane, PointLight, Polygon, Scene, Sphere, parse_scene
-from ..schema import Context, field
-from .base import Out, Probes, Stage, Task, as_array, functions_replaced
+from ... import tracescene, schema
+from ...errors import KitError
+from ...scene import AreaLight, Camera, Mesh, Plane, PointLight, Polygon, Scene, Sphere, parse_scene
+from ...schema import Context, field
+from ..base import Out, Probes, Stage, Task, as_array, functions_replaced, part
 
 RAYS = "len(origins)"
 TASKS = (
@@ -67,7 +67,7 @@ RAY_BYTES = 160
 
 
 def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
-    from ..limits import Cost
+    from ...limits import Cost
     w, h = size or (scene.image.width, scene.image.height)
     spp = STAGE.options(scene).spp
     return [Cost("options.whitted.spp", RAY_BYTES * w * h * spp, f"{w * h * spp:,} camera rays ({w}x{h}, {spp} per pixel)")]
@@ -399,11 +399,11 @@ def probe_render(impl: Any, scene: dict, size: list[int], origins: np.ndarray | 
     return out
 
 
-def demo(module: Any, output: Any, window: bool, frames: int | None, scene: str = "whitted",
+def run_demo(module: Any, output: Any, window: bool, frames: int | None, scene: str = "whitted",
          size: tuple[int, int] | None = None, screenshot: Any = None) -> list:
-    """The tracer refining in a window, its switches and a pixel's ray tree (:mod:`cs451.stages._whitted_demo`)."""
-    from ._whitted_demo import demo as whitted_demo  # GLFW and the window loop load only for a demo
-    return whitted_demo(module, output, window, frames, scene=scene, size=size, screenshot=screenshot)
+    """The tracer refining in a window, its switches and a pixel's ray tree (:mod:`cs451.stages.whitted.demo`)."""
+    run = part(__name__, "demo").demo
+    return run(module, output, window, frames, scene=scene, size=size, screenshot=screenshot)
 
 
 #: Camera rays at this size make batches large enough for an implementation's compiled path (the reference's
@@ -415,7 +415,7 @@ def warm(impl: Any) -> list[tuple[str, Callable[[], Any]]]:
     """What a first render or demo compiles in the reference (numba kernels; a numpy submission compiles
     nothing): a frame without a hierarchy and one with it, then closest hits (W5) and shadow rays (W7) on
     their own, which the demo's ray trees and switches cast bounce by bounce."""
-    from ..scene import load_scene
+    from ...scene import load_scene
 
     def frame(name: str) -> None:
         render(load_scene(name), impl, size=WARM_SIZE)
@@ -432,8 +432,14 @@ def warm(impl: Any) -> list[tuple[str, Callable[[], Any]]]:
             ("closest hits and shadow rays, as the demo casts them", queries)]
 
 
+#: the demo's keys
+DEMO_KEYS = (("s", "shadows"), ("r", "reflection"), ("t", "refraction"), ("c", "the β cut-off"), ("+ -", "depth"),
+             ("click", "a pixel's ray tree"), ("x", "clears it"), ("q", "quits"))
+
+
 STAGE = Stage(
     name="whitted", number=2, title="Whitted ray tracing", handout="02-whitted", tasks=TASKS, render=render,
-    probes=PROBES, demo=demo, options_type=WhittedOptions, draws=(Sphere, Plane, Polygon, Mesh, PointLight, AreaLight),
+    probes=PROBES, demo=run_demo, options_type=WhittedOptions, draws=(Sphere, Plane, Polygon, Mesh, PointLight, AreaLight),
+    demo_keys=DEMO_KEYS,
     estimate=estimate, warm=warm,
 )

@@ -11,19 +11,19 @@ from typing import Callable
 
 import numpy as np
 
-from .. import KIT_ROOT
-from ..demos.frames import captioned
-from ..imageio import to_uint8
-from ..scene import BUNDLED_DIR, parse_scene
+from ... import KIT_ROOT
+from ...demos.frames import captioned
+from ...imageio import to_uint8
+from ...scene import BUNDLED_DIR, parse_scene
 
 
 def _reference(stage: str):
-    from ..impl import load_impl
+    from ...impl import load_impl
     return load_impl(KIT_ROOT / "reference" / stage, stage)
 
 
 def _panel(scene: dict, size: tuple[int, int], caption: list[str]) -> np.ndarray:
-    from . import sphere as s1
+    from .. import sphere as s1
     sc = parse_scene(scene, "<diagram>")
     image = to_uint8(s1.render(sc, _reference("sphere"), size), sc.image.exposure, sc.image.srgb)
     for line in caption:

@@ -8,10 +8,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from ..demos.window import Window
-from ..imageio import save_png
-from ..scene import load_scene
-from . import sphere as s1
+from ...demos.window import Window
+from ...imageio import save_png
+from ...scene import load_scene
+from .. import sphere as s1
 
 
 def demo(module: Any, folder: Path, window: bool, frames: int | None) -> list[Path]:

@@ -25,14 +25,14 @@ from typing import Any
 
 import numpy as np
 
-from ..demos.frames import captioned
-from ..errors import KitError
-from ..demos.player import Event, play
-from ..formfactors import HemicubeFormFactors, palette, unfold
-from ..imageio import to_uint8
-from ..patches import patch_triangles, scene_polygons
-from ..scene import load_scene
-from . import hemicube as H
+from ...demos.frames import captioned
+from ...errors import KitError
+from ...demos.player import Event, play
+from ...formfactors import HemicubeFormFactors, palette, unfold
+from ...imageio import to_uint8
+from ...patches import patch_triangles, scene_polygons
+from ...scene import load_scene
+from .. import hemicube as H
 
 #: Seconds each patch stays up in a sweep (space) in the window.
 SWEEP_SECONDS = 1.5
@@ -87,7 +87,7 @@ class ScenePainter:
     """The scene from its camera, each patch in a colour given per draw, and the patch under every pixel (-1: none)."""
 
     def __init__(self, ctx: Any, scene: Any, quads: np.ndarray, calls: Any, size: tuple[int, int]):
-        from ..viewing import camera_projection, camera_view
+        from ...viewing import camera_projection, camera_view
         self.ctx, self.size = ctx, size
         width, height = size
         self.mvp = camera_projection(scene.camera, width, height) @ camera_view(scene.camera, calls.views)
@@ -104,7 +104,7 @@ class ScenePainter:
 
     def paint(self, colours: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Draw with ``colours`` (n, 3) per patch: the linear image (h, w, 3), top row first, and the ids (h, w)."""
-        from ..gl import make_current
+        from ...gl import make_current
         make_current(self.ctx)
         width, height = self.size
         self.colours.write(np.asarray(colours, dtype="f4")[self.ids].tobytes())
@@ -163,7 +163,7 @@ class HemicubeDemo:
         return lines.shape[1], lines.shape[0]
 
     def start(self, ctx: Any) -> None:
-        from ..gl import create_context
+        from ...gl import create_context
         self.ctx = ctx or create_context()
         self.painter = ScenePainter(self.ctx, self.scene, self.quads, self.calls, (self.width, self.height))
 

@@ -2,7 +2,7 @@
 
 A torus from ``trimesh.creation.torus`` (192 × 144 sections: 55,296 triangles) whose
 tube radius ripples with the angles, so the surface has detail at every scale.
-``python -m cs451.stages._whitted_mesh`` rewrites the OBJ; a test checks the
+``python -m cs451.stages.whitted.mesh`` rewrites the OBJ; a test checks the
 committed file is what this code makes.
 """
 from __future__ import annotations
@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..scene import BUNDLED_DIR
+from ...scene import BUNDLED_DIR
 
 TORUS_OBJ = BUNDLED_DIR / "rippled-torus.obj"
 MAJOR, MINOR, SECTIONS = 1.0, 0.38, (192, 144)
@@ -33,7 +33,7 @@ def rippled_torus():
 
 def obj_text() -> str:
     mesh = rippled_torus()
-    lines = ["# rippled torus made by cs451/stages/_whitted_mesh.py (do not edit)"]
+    lines = ["# rippled torus made by cs451/stages/whitted/mesh.py (do not edit)"]
     lines += [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in mesh.vertices]
     lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in mesh.faces]
     return "\n".join(lines) + "\n"

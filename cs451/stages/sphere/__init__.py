@@ -14,12 +14,12 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .. import schema
-from ..errors import KitError
-from ..gl import compile_program, create_context
-from ..scene import Camera, DirectionalLight, Group, PointLight, Scene, Sphere, parse_scene, walk_objects
-from ..schema import Context, field
-from .base import Out, Probes, Stage, Task, functions_replaced
+from ... import schema
+from ...errors import KitError
+from ...gl import compile_program, create_context
+from ...scene import Camera, DirectionalLight, Group, PointLight, Scene, Sphere, parse_scene, walk_objects
+from ...schema import Context, field
+from ..base import Out, Probes, Stage, Task, functions_replaced, part
 
 MAX_LIGHTS = 8
 
@@ -372,10 +372,10 @@ def probe_render(impl: Any, scene: dict, size: list[int], shading: str | None = 
     return {"image": render(sc, impl, tuple(size), shading=shading, given=given)}  # type: ignore[arg-type]
 
 
-def demo(module: Any, output: Path, window: bool, frames: int | None) -> list[Path]:
-    """The notes' window, or its images without a display (:mod:`cs451.stages._sphere_demo`)."""
-    from ._sphere_demo import demo as sphere_demo  # GLFW and the window loop load only for a demo
-    return sphere_demo(module, output, window, frames)
+def run_demo(module: Any, output: Path, window: bool, frames: int | None) -> list[Path]:
+    """The notes' window, or its images without a display (:mod:`cs451.stages.sphere.demo`)."""
+    run = part(__name__, "demo").demo
+    return run(module, output, window, frames)
 
 
 #: bytes per slice × stack cell of a sphere's mesh, measured on the reference (184 at 2000 × 2000) with margin
@@ -383,7 +383,7 @@ MESH_CELL_BYTES = 256
 
 
 def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
-    from ..limits import Cost
+    from ...limits import Cost
     w, h = size or (scene.image.width, scene.image.height)
     costs = [Cost("image.width", 64.0 * w * h, f"a {w}x{h} image")]
     for obj, where in walk_objects(scene.objects):
@@ -393,14 +393,18 @@ def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
     return costs
 
 
-def diagrams() -> dict:
-    """The handout's pictures of where the light is and of the modelview order (:mod:`._sphere_diagrams`)."""
-    from ._sphere_diagrams import PICTURES
-    return PICTURES
+def handout_diagrams() -> dict:
+    """The handout's pictures of where the light is and of the modelview order (:mod:`cs451.stages.sphere.diagrams`)."""
+    return part(__name__, "diagrams").PICTURES
+
+
+#: the demo's keys: the student's S8 table (the handout's)
+DEMO_KEYS = (("s", "Gouraud / Phong"), ("+ -", "tessellation"), ("q", "quits (through S8)"))
 
 
 STAGE = Stage(
     name="sphere", number=1, title="The lit sphere", handout="01-sphere", tasks=TASKS, render=render, probes=PROBES,
-    demo=demo, options_type=SphereOptions, draws=(Sphere, Group, PointLight, DirectionalLight), estimate=estimate,
-    diagrams=diagrams,
+    demo=run_demo, options_type=SphereOptions, draws=(Sphere, Group, PointLight, DirectionalLight), estimate=estimate,
+    demo_keys=DEMO_KEYS,
+    diagrams=handout_diagrams,
 )

@@ -14,10 +14,10 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .. import schema
-from ..scene import AreaLight, Polygon, Scene
-from ..schema import Context, field
-from .base import Out, Probes, Stage, Task
+from ... import schema
+from ...scene import AreaLight, Polygon, Scene
+from ...schema import Context, field
+from ..base import Out, Probes, Stage, Task, part
 
 TASKS = (
     Task("H1", "delta_form_factors", "Delta form factors", ("resolution",),
@@ -116,7 +116,7 @@ def hemicube_bytes(resolution: int, batch: int = 1) -> float:
 
 
 def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
-    from ..limits import Cost
+    from ...limits import Cost
     r = STAGE.options(scene).resolution
     return [Cost("options.hemicube.resolution", hemicube_bytes(r), f"a hemicube of resolution {r}")]
 
@@ -125,8 +125,8 @@ def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
 
 def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, **_: Any) -> np.ndarray:
     """The hemicube of ``options.hemicube.patch`` unfolded (a colour per patch id), or F from it painted on the scene."""
-    from ..formfactors import HemicubeFormFactors, formfactor_image, item_buffer_image
-    from ..patches import scene_polygons
+    from ...formfactors import HemicubeFormFactors, formfactor_image, item_buffer_image
+    from ...patches import scene_polygons
     opts = STAGE.options(scene)
     quads, _, _ = scene_polygons(scene)
     if opts.patch >= len(quads):
@@ -175,7 +175,7 @@ def probe_contour(impl: Any, point: list, normal: list, polygon: list) -> dict[s
 
 
 def _quads(quads: list) -> np.ndarray:
-    from ..patches import as_quads
+    from ...patches import as_quads
     return as_quads(quads)
 
 
@@ -183,7 +183,7 @@ def _quads(quads: list) -> np.ndarray:
 def probe_rows(impl: Any, quads: list, rows: list[int], resolution: int = 128, rotate: bool = False,
                proximity: str = "none", seed: int = 0) -> dict[str, np.ndarray]:
     """Rows of the form-factor matrix of ``quads``, everything from the submission (H1-H5, and H6 if asked)."""
-    from ..formfactors import HemicubeFormFactors
+    from ...formfactors import HemicubeFormFactors
     ff = HemicubeFormFactors(_quads(quads), calls(impl), resolution=resolution, rotate=rotate, proximity=proximity, seed=seed)
     return {"rows": ff.rows(list(rows))}
 
@@ -193,7 +193,7 @@ def probe_hemicube_buffers(impl: Any, quads: list, rows: list[int], resolution: 
                            seed: int = 0) -> dict[str, np.ndarray]:
     """Trusted inputs of the row tests (run on the reference only): the item buffers of the rows' hemicubes,
     the tables, and the rows before any proximity fix, so that H5's and H6's tests judge H5 or H6 alone."""
-    from ..formfactors import HemicubeFormFactors
+    from ...formfactors import HemicubeFormFactors
     ff = HemicubeFormFactors(_quads(quads), calls(impl), resolution=resolution, rotate=rotate, proximity="none", seed=seed)
     tops, sides = ff.item_buffers(rows)
     top_w, side_w = ff.tables
@@ -214,7 +214,7 @@ def probe_rows_from_buffers(impl: Any, quads: list, rows: list[int], top_items: 
 def probe_proximity_rows(impl: Any, quads: list, rows: list[int], hemicube_rows: np.ndarray, resolution: int = 128,
                          rotate: bool = False, seed: int = 0, **_: Any) -> dict[str, np.ndarray]:
     """H6 alone: trusted hemicube rows (the reference's H1 to H5), fixed for close patches with the submission's H6."""
-    from ..formfactors import HemicubeFormFactors
+    from ...formfactors import HemicubeFormFactors
     ff = HemicubeFormFactors(_quads(quads), calls(impl), resolution=resolution, rotate=rotate, proximity="contour", seed=seed)
     return {"rows": np.stack([ff.proximity_fixed(i, row) for i, row in zip(rows, hemicube_rows)])}
 
@@ -222,7 +222,7 @@ def probe_proximity_rows(impl: Any, quads: list, rows: list[int], hemicube_rows:
 @PROBES.register
 def probe_item_buffer_parts(impl: Any, quads: list, patch: int, resolution: int) -> dict[str, np.ndarray]:
     """The trusted inputs of an item-buffer image test: the views and projections (from the reference)."""
-    from ..formfactors import hemicube_inputs
+    from ...formfactors import hemicube_inputs
     views, projections, near, far = hemicube_inputs(_quads(quads), calls(impl), patch)
     return {"views": views, "projections": projections}
 
@@ -230,20 +230,26 @@ def probe_item_buffer_parts(impl: Any, quads: list, patch: int, resolution: int)
 @PROBES.register
 def probe_item_buffer(impl: Any, quads: list, patch: int, resolution: int, **given: np.ndarray) -> dict[str, np.ndarray]:
     """The unfolded item buffer of one hemicube as an image, drawn with the submission's shaders (H4)."""
-    from ..formfactors import HemicubeFormFactors, item_buffer_image
+    from ...formfactors import HemicubeFormFactors, item_buffer_image
     ff = HemicubeFormFactors(_quads(quads), calls(impl), resolution=resolution, rotate=False, proximity="none")
     return {"image": item_buffer_image(ff, int(patch), None, given=given or None)}
 
 
-def demo(module: Any, output: Any, window: bool, frames: int | None, scene: str = "cornell-box",
+def run_demo(module: Any, output: Any, window: bool, frames: int | None, scene: str = "cornell-box",
          size: tuple[int, int] | None = None, screenshot: Any = None) -> list:
     """A patch's five views, unfolded item buffer, delta form factors and row painted on the scene
-    (:mod:`cs451.stages._hemicube_demo`)."""
-    from ._hemicube_demo import demo as hemicube_demo  # GLFW and the window loop load only for a demo
-    return hemicube_demo(module, output, window, frames, scene=scene, size=size, screenshot=screenshot)
+    (:mod:`cs451.stages.hemicube.demo`)."""
+    run = part(__name__, "demo").demo
+    return run(module, output, window, frames, scene=scene, size=size, screenshot=screenshot)
+
+
+#: the demo's keys
+DEMO_KEYS = (("← →", "patch"), ("click", "picks a patch (scene or item buffer)"), ("space", "sweep"),
+             ("p", "proximity fix (H6)"), ("r", "rotation"), ("+ -", "resolution"), ("q", "quits"))
 
 
 STAGE = Stage(
     name="hemicube", number=3, title="Hemi-cube form factors", handout="03-hemicube", tasks=TASKS, render=render,
-    probes=PROBES, demo=demo, options_type=HemicubeOptions, draws=(Polygon, AreaLight), estimate=estimate,
+    probes=PROBES, demo=run_demo, options_type=HemicubeOptions, draws=(Polygon, AreaLight), estimate=estimate,
+    demo_keys=DEMO_KEYS,
 )

@@ -10,23 +10,23 @@ from typing import Callable
 
 import numpy as np
 
-from .. import KIT_ROOT
-from ..demos.frames import captioned
-from ..imageio import to_uint8
-from ..scene import load_scene
+from ... import KIT_ROOT
+from ...demos.frames import captioned
+from ...imageio import to_uint8
+from ...scene import load_scene
 
 #: each panel's size: small enough that ``cs451 figures --check`` redraws it in about a second
 PANEL = (240, 240)
 
 
 def _reference(stage: str):
-    from ..impl import load_impl
+    from ...impl import load_impl
     return load_impl(KIT_ROOT / "reference" / stage, stage)
 
 
 def glossy_box() -> np.ndarray:
     """The glossy box without and with the highlight, side by side, captioned."""
-    from . import radiosity as R
+    from .. import radiosity as R
 
     scene = load_scene("glossy-box")
     impl = _reference("radiosity")

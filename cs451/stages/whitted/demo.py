@@ -41,13 +41,13 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .. import tracescene
-from ..demos.frames import captioned
-from ..demos.player import Event, play
-from ..imageio import to_uint8
-from ..scene import Sphere, load_scene
-from . import whitted as W
-from .base import functions_replaced
+from ... import tracescene
+from ...demos.frames import captioned
+from ...demos.player import Event, play
+from ...imageio import to_uint8
+from ...scene import Sphere, load_scene
+from .. import whitted as W
+from ..base import functions_replaced
 
 #: The most rays one piece hands to W11 (its memory); below that, a piece is what the last one says fits in
 #: half a step.

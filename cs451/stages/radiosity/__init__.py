@@ -22,14 +22,14 @@ from typing import Any, Callable, Iterator, Literal
 
 import numpy as np
 
-from .. import drawing, patching, schema, solvers
-from ..errors import KitError
-from .. import specular as glossy       # the module; `specular` is also an option below
-from ..patching import Patches
-from ..solvers import MatrixRows, Solution, solve_direct, shooting_matrix
-from ..scene import AreaLight, Polygon, Scene, parse_scene
-from ..schema import Context, field
-from .base import Out, Probes, Stage, Task, check_returns, student_call
+from ... import drawing, patching, schema, solvers
+from ...errors import KitError
+from ... import specular as glossy       # the module; `specular` is also an option below
+from ...patching import Patches
+from ...solvers import MatrixRows, Solution, solve_direct, shooting_matrix
+from ...scene import AreaLight, Polygon, Scene, parse_scene
+from ...schema import Context, field
+from ..base import Out, Probes, Stage, Task, check_returns, part, student_call
 
 TASKS = (
     Task("R1", "subdivide", "Subdividing into patches", ("quads", "max_edge"),
@@ -179,8 +179,8 @@ def solve(patches: Patches, impl: Any, opts: RadiosityOptions, rows: Any = None,
 
 def camera_view(scene: Scene) -> np.ndarray:
     """World to eye for the scene camera, from the stage-3 implementation's H2 (see :mod:`cs451.viewing`)."""
-    from ..viewing import camera_view as view_from
-    from . import hemicube as H
+    from ...viewing import camera_view as view_from
+    from .. import hemicube as H
 
     return view_from(scene.camera, H.calls(STAGE.trusted("hemicube")).views)
 
@@ -205,10 +205,10 @@ def hemicube_formfactors(quads: np.ndarray, resolution: int = 128, proximity: st
     Faces are drawn culled (only the patches that can land in each) when the stage-3 code is the kit's reference,
     whose shaders place vertices as culling assumes; a student's own stage-3 package is drawn unculled.
     """
-    from ..formfactors import HemicubeFormFactors
-    from . import hemicube as H
+    from ...formfactors import HemicubeFormFactors
+    from .. import hemicube as H
 
-    from ..impl import KIT_ROOT, earlier_stage_impl
+    from ...impl import KIT_ROOT, earlier_stage_impl
 
     if proximity is None:       # the stage's default, so that `cs451 render` and the grader's systems agree
         proximity = RadiosityOptions.__dataclass_fields__["proximity"].default
@@ -220,7 +220,7 @@ def hemicube_formfactors(quads: np.ndarray, resolution: int = 128, proximity: st
 @contextlib.contextmanager
 def shooting_progress(patches: Patches, opts: RadiosityOptions) -> Iterator[Callable | None]:
     """An ``on_shot`` that moves a bar from the emitted energy to the tolerance (on a log scale)."""
-    from ..progress import Progress
+    from ...progress import Progress
     emitted = solvers.energy(patches.emission, patches.areas)
     if opts.solver != "progressive" or emitted <= 0:
         yield None
@@ -248,7 +248,7 @@ def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, quiet: 
     refusal comes first. Prints a one-line summary (every counter with ``--verbose``, nothing when ``quiet``)
     and shows the shooting's progress toward the tolerance.
     """
-    from ..progress import verbose
+    from ...progress import verbose
     opts = STAGE.options(scene, **overrides)
     patches = make_patches(scene, impl, opts.patch_size)
     gloss = glossy.highlight(scene, patches, opts.specular_samples) if opts.specular else None  # refused before solving
@@ -364,10 +364,10 @@ def probe_render(impl: Any, scene: dict, size: list[int], tolerance: float = 1e-
     return {"image": np.clip(image * sc.image.exposure, 0.0, 1.0), "display": display}
 
 
-def demo(module: Any, output: Path, window: bool, frames: int | None) -> list[Path]:
-    """B beside B + ambient as the shots go by (:mod:`cs451.stages._radiosity_demo`)."""
-    from ._radiosity_demo import demo as radiosity_demo  # GLFW and the window loop load only for a demo
-    return radiosity_demo(module, output, window, frames)
+def run_demo(module: Any, output: Path, window: bool, frames: int | None) -> list[Path]:
+    """B beside B + ambient as the shots go by (:mod:`cs451.stages.radiosity.demo`)."""
+    run = part(__name__, "demo").demo
+    return run(module, output, window, frames)
 
 
 #: bytes per patch beyond its row of form factors: geometry, solver state, vertices (with margin)
@@ -376,7 +376,7 @@ PATCH_BYTES = 4096
 
 def patch_count(scene: Scene, patch_size: float) -> float:
     """How many patches R1's rule (handout §R1: ⌈longest opposite edge / max_edge⌉ each way) makes of the scene."""
-    from ..patches import scene_polygons
+    from ...patches import scene_polygons
     quads, _, _ = scene_polygons(scene)
     if patch_size <= 0:
         return float(len(quads))
@@ -387,9 +387,9 @@ def patch_count(scene: Scene, patch_size: float) -> float:
 
 
 def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
-    from ..formfactors.reciprocity import MATRICES
-    from ..limits import Cost
-    from .hemicube import hemicube_bytes
+    from ...formfactors.reciprocity import MATRICES
+    from ...limits import Cost
+    from ..hemicube import hemicube_bytes
     opts = STAGE.options(scene)
     n = patch_count(scene, opts.patch_size)
     batch = 1 if opts.solver == "progressive" and not opts.reciprocity else 256
@@ -401,21 +401,24 @@ def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
                  f"{batch} hemicube(s) of resolution {opts.resolution} at a time")]
 
 
-def diagrams() -> dict:
-    """The handout's picture of the glossy box without and with its highlight (:mod:`._radiosity_diagrams`)."""
-    from ._radiosity_diagrams import PICTURES
-    return PICTURES
+def handout_diagrams() -> dict:
+    """The handout's picture of the glossy box without and with its highlight (:mod:`cs451.stages.radiosity.diagrams`)."""
+    return part(__name__, "diagrams").PICTURES
+
+
+#: the demo's keys
+DEMO_KEYS = (("q", "quits"),)
 
 
 STAGE = Stage(
     name="radiosity", number=4, title="Progressive refinement radiosity", handout="04-radiosity", tasks=TASKS,
     render=render,
     probes=PROBES,
-    demo=demo,
+    demo=run_demo, demo_keys=DEMO_KEYS,
     builds_on=("hemicube",),
     options_type=RadiosityOptions,
     draws=(Polygon, AreaLight),
     estimate=estimate,
-    diagrams=diagrams,
+    diagrams=handout_diagrams,
 )
 

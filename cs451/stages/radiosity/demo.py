@@ -14,11 +14,11 @@ from typing import Any
 
 import numpy as np
 
-from ..demos.player import Closed, Screen
-from ..drawing import GouraudDrawer, camera_matrix, with_highlight
-from ..imageio import to_uint8
-from ..scene import load_scene
-from . import radiosity as R
+from ...demos.player import Closed, Screen
+from ...drawing import GouraudDrawer, camera_matrix, with_highlight
+from ...imageio import to_uint8
+from ...scene import load_scene
+from .. import radiosity as R
 
 
 def demo_shots(total_hint: int, frames: int | None) -> list[int]:

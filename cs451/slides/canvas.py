@@ -1,0 +1,169 @@
+"""What the decks' figures share: the reference they draw with, scenes, matplotlib canvases of exact pixel sizes,
+projections of scene points, grids of captioned panels. Nothing here is about one stage.
+"""
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import sys
+from pathlib import Path
+from dataclasses import dataclass
+from typing import Any, Callable, Iterator
+
+import numpy as np
+
+from ..errors import KitError
+from ..impl import load_impl
+from ..imageio import to_uint8
+from ..scene import BUNDLED_DIR
+from . import registry
+
+#: Pixels per inch of every matplotlib canvas: figure sizes below are in pixels.
+DPI = 100
+
+
+def reference_impl(stage: str) -> Any:
+    """The reference of ``stage`` (from :data:`cs451.slides.registry.REFERENCE`, which tests point at a copy),
+    imported under a private name."""
+    folder = registry.REFERENCE / stage
+    if not (folder / "__init__.py").is_file():
+        raise KitError(f"{folder}: no reference package here (the figures draw with the kit's reference)")
+    return load_impl(folder, stage)
+
+
+def scene_data(file: str) -> dict[str, Any]:
+    """A bundled scene as its JSON dict (to change a field before parsing it)."""
+    return json.loads((BUNDLED_DIR / file).read_text())
+
+
+def encoded(image: np.ndarray, scene: Any) -> np.ndarray:
+    return to_uint8(image, scene.image.exposure, scene.image.srgb)
+
+
+@contextlib.contextmanager
+def numpy_path(impl: Any) -> Iterator[None]:
+    """Within the block the reference tracer keeps to its numpy path whatever the batch size (the switches
+    tests/test_whitted_frame.py sets); another implementation runs as it is."""
+    bvh = sys.modules.get(f"{impl.__name__}.bvh")
+    if bvh is None or not hasattr(bvh, "COMPILED_RAYS") or not hasattr(bvh, "_compiled"):
+        yield
+        return
+    saved = bvh.COMPILED_RAYS, bvh._compiled[0]
+    bvh.COMPILED_RAYS, bvh._compiled[0] = 10 ** 12, False
+    try:
+        yield
+    finally:
+        bvh.COMPILED_RAYS, bvh._compiled[0] = saved
+
+
+
+def project(matrix: np.ndarray, points: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """Pixel coordinates (x right, y down, pixel centres at integers) of points in front of the camera."""
+    points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    clip = np.c_[points, np.ones(len(points))] @ matrix.T
+    ndc = clip[:, :2] / clip[:, 3:4]
+    return np.c_[(ndc[:, 0] + 1) / 2 * size[0] - 0.5, (1 - ndc[:, 1]) / 2 * size[1] - 0.5]
+
+
+def visible_segment(matrix: np.ndarray, a: np.ndarray, b: np.ndarray, size: tuple[int, int]) -> np.ndarray | None:
+    """The part of segment a–b in front of the camera, in pixel coordinates (2, 2), or None if it is all behind."""
+    wa, wb = (float(np.r_[p, 1.0] @ matrix[3]) for p in (a, b))
+    eps = 1e-6
+    if wa <= eps and wb <= eps:
+        return None
+    if wa <= eps:
+        a = a + (b - a) * (eps - wa) / (wb - wa)
+    elif wb <= eps:
+        b = a + (b - a) * (eps - wa) / (wb - wa)
+    return project(matrix, np.stack([a, b]), size)
+
+
+def new_canvas(width: int, height: int) -> Any:
+    """A matplotlib figure of this many pixels, drawn by Agg (no pyplot, no global backend)."""
+    try:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+    except ImportError:
+        raise KitError("the slides' figures draw with matplotlib: pip install -e '.[bench]'") from None
+    fig = Figure(figsize=(width / DPI, height / DPI), dpi=DPI, facecolor="white")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def canvas_pixels(fig: Any) -> np.ndarray:
+    fig.canvas.draw()
+    return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
+
+
+def png_pixels(path: Path) -> np.ndarray:
+    from PIL import Image
+    with Image.open(path) as image:
+        return np.asarray(image.convert("RGB")).copy()
+
+
+@dataclass
+class Panel:
+    """One picture of a grid, its caption, and what to draw over it (``overlay(ax)``, in pixel coordinates)."""
+    image: np.ndarray
+    caption: str = ""
+    overlay: Callable[[Any], None] | None = None
+
+
+def panel_grid(rows: list[list[Panel]], title: str = "", pad: int = 10, min_width: int = 150,
+          font: float = 9.0) -> np.ndarray:
+    """Panels at their own pixel size (no resampling) in rows, each caption above its panel, a title on top."""
+    band = 8 + 15 * max(p.caption.count("\n") + 1 for row in rows for p in row)
+    cell_w = max(min_width, max(p.image.shape[1] for row in rows for p in row))
+    heights = [max(p.image.shape[0] for p in row) for row in rows]
+    columns = max(len(row) for row in rows)
+    top = 10 + 18 * (title.count("\n") + 1) if title else 0
+    width = columns * cell_w + (columns + 1) * pad
+    height = top + sum(heights) + len(rows) * band + (len(rows) + 1) * pad
+    fig = new_canvas(width, height)
+    for r, row in enumerate(rows):
+        row_x = (columns - len(row)) * (cell_w + pad) // 2           # a shorter row is centred
+        for c, panel in enumerate(row):
+            h, w = panel.image.shape[:2]
+            x = row_x + pad + c * (cell_w + pad) + (cell_w - w) // 2
+            y = top + pad + sum(heights[:r]) + r * (band + pad) + band
+            ax = fig.add_axes((x / width, 1 - (y + h) / height, w / width, h / height))
+            ax.imshow(panel.image, interpolation="nearest")
+            ax.set_axis_off()
+            if panel.overlay is not None:
+                panel.overlay(ax)
+            ax.set_xlim(-0.5, w - 0.5)
+            ax.set_ylim(h - 0.5, -0.5)
+            if panel.caption:
+                fig.text((x + w / 2) / width, 1 - (y - 4) / height, panel.caption, ha="center", va="bottom",
+                         fontsize=font, linespacing=1.2)
+    if title:
+        fig.text(0.5, 1 - 6 / height, title, ha="center", va="top", fontsize=font + 2, weight="bold")
+    return canvas_pixels(fig)
+
+
+def stacked(images: list[np.ndarray], gap: int = 6) -> np.ndarray:
+    """Images one above the other, centred on a white page."""
+    width = max(i.shape[1] for i in images)
+    out = []
+    for image in images:
+        left = (width - image.shape[1]) // 2
+        out.append(np.pad(image, ((0, gap), (left, width - image.shape[1] - left), (0, 0)), constant_values=255))
+    return np.vstack(out)[:-gap]
+
+
+def axes_plot(width: int, height: int, draw: Callable[[Any], None]) -> np.ndarray:
+    """A plot of this many pixels: ``draw(ax)`` on one axes."""
+    fig = new_canvas(width, height)
+    ax = fig.add_subplot(1, 1, 1)
+    draw(ax)
+    fig.tight_layout()
+    return canvas_pixels(fig)
+
+
+
+def quietly(work: Callable[[], Any]) -> Any:
+    """Run a bench function without its printed tables (the figure shows them)."""
+    with contextlib.redirect_stdout(io.StringIO()):
+        return work()
+
