@@ -41,13 +41,21 @@ def compare_files(mine: str | Path, target: str | Path, output: str | Path,
     if a.shape != b.shape:
         raise KitError(f"{mine}: is {b.shape[1]}x{b.shape[0]}, the target {target} is {a.shape[1]}x{a.shape[0]}; "
                        f"render at the target's size (--size {a.shape[1]}x{a.shape[0]})")
-    result = compare_images(a, b, tolerance)
-    target8, mine8 = (np.round(x * 255).astype(np.uint8) for x in (a, b))
+    return side_by_side(a, b, output, tolerance)
+
+
+def side_by_side(target: np.ndarray, mine: np.ndarray, output: str | Path,
+                 tolerance: ImageTolerance = ImageTolerance(), labels: tuple[str, str] = ("target", "mine")) -> Comparison:
+    """Two images of one size (linear, 0-1) judged as the image tests judge them, and written to ``output`` side by
+    side with the grader's error map and ꟻLIP's: the picture a failing image test points at."""
+    result = compare_images(target, mine, tolerance)
+    target8, mine8 = (np.round(np.clip(x, 0.0, 1.0) * 255).astype(np.uint8) for x in (target, mine))
     flip_mean, flip_map = flip_error(target8, mine8)
-    panels = [_labelled(target8, "target"), _labelled(mine8, "mine"),
+    panels = [_labelled(target8, labels[0]), _labelled(mine8, labels[1]),
               _labelled(error_heatmap(result.error_map, tolerance.threshold), "error (grader)"),
               _labelled(flip_map, f"FLIP {flip_mean:.3f}")]
     gap = np.full((panels[0].shape[0], 4, 3), 255, np.uint8)
     row = np.concatenate([p for panel in panels for p in (panel, gap)][:-1], axis=1)
     path = save_png(output, row)
     return Comparison(result.passed, result.message, flip_mean, path)
+

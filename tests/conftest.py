@@ -1,7 +1,10 @@
 """Shared fixtures: the kit root, a scratch copy of the reference for broken-submission tests."""
 from __future__ import annotations
 
+import os
+import re
 import shutil
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -90,3 +93,20 @@ def numpy_path_until_a_test_asks():
         if name.endswith(".bvh") and callable(getattr(module, "use_compiled", None)) and hasattr(module, "_compiled"):
             module._compiled[0] = False
     yield
+
+
+def assert_images_match(target, mine, tolerance, what: str, labels: tuple[str, str] = ("truth", "kit")):
+    """``compare_images`` as the image tests judge, returning its comparison; on failure the assertion names the
+    picture it wrote (both images, the grader's error map and ꟻLIP's, side by side) in ``$CS451_TEST_PICTURES``
+    (default: cs451-test-pictures in the temporary folder), so a failing image test shows where, not only how much."""
+    from cs451.compare import compare_images
+    from cs451.side_by_side import side_by_side
+    comparison = compare_images(target, mine, tolerance)
+    if not comparison.passed:
+        folder = Path(os.environ.get("CS451_TEST_PICTURES") or Path(tempfile.gettempdir()) / "cs451-test-pictures")
+        folder.mkdir(parents=True, exist_ok=True)
+        picture = folder / (re.sub(r"[^\w.-]+", "-", what).strip("-")[:120] + ".png")
+        side_by_side(target, mine, picture, tolerance, labels)
+        raise AssertionError(f"{what}: {comparison.message}; difference picture: {picture}")
+    return comparison
+

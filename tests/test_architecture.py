@@ -235,7 +235,8 @@ def test_no_module_outside_a_stage_package_names_a_stage():
 
 
 def test_the_engine_has_no_import_cycle():
-    """No import cycle between the modules of cs451/ (function-level imports included), measured on the source."""
+    """No import cycle between the modules of cs451/ (function-level imports included, type-checking ones not: they
+    never run), measured on the source."""
     graph: dict[str, set[str]] = {}
     root = KIT_ROOT / "cs451"
     modules = {".".join(("cs451", *p.relative_to(root).with_suffix("").parts)).removesuffix(".__init__"): p
@@ -243,7 +244,12 @@ def test_the_engine_has_no_import_cycle():
     for name, path in modules.items():
         package = name if path.name == "__init__.py" else name.rsplit(".", 1)[0]
         targets = set()
-        for node in ast.walk(ast.parse(path.read_text())):
+        tree = ast.parse(path.read_text())
+        typing_only = {id(n) for block in ast.walk(tree) if isinstance(block, ast.If)       # `if TYPE_CHECKING:`
+                       and getattr(block.test, "id", None) == "TYPE_CHECKING" for n in ast.walk(block)}
+        for node in ast.walk(tree):
+            if id(node) in typing_only:
+                continue
             if isinstance(node, ast.ImportFrom):
                 base = package
                 for _ in range(max(node.level - 1, 0)):
@@ -270,3 +276,25 @@ def test_the_engine_has_no_import_cycle():
             visit(node, [node])
     assert not cycles, "\n".join(" -> ".join(c) for c in cycles[:10])
 
+
+
+#: Modules allowed past the limit, each with why; the list may only shrink.
+LONG_MODULES = {
+    # the reference's compiled kernels: issue 35 moves the speed layer out of the student's reference into an
+    # instructor-side package, one hook away; until then it is one numba cache file by necessity (see its docstring)
+    "reference/whitted/kernels.py": 900,
+}
+MODULE_LINES = 450
+
+
+def test_no_module_is_longer_than_a_reader_can_hold():
+    long = {}
+    for top in ("cs451", "reference", "autograder"):
+        for path in (KIT_ROOT / top).rglob("*.py"):
+            rel = path.relative_to(KIT_ROOT).as_posix()
+            if "vendor" in path.parts or "__pycache__" in path.parts:
+                continue
+            lines = len(path.read_text().splitlines())
+            if lines > LONG_MODULES.get(rel, MODULE_LINES):
+                long[rel] = lines
+    assert not long, f"modules over {MODULE_LINES} lines (split them by job): {long}"

@@ -121,8 +121,18 @@ def run_gradescope(layout, folder: Path, mode: str) -> Outcome:
 @pytest.fixture(scope="module")
 def corpus():
     root = world_readable_dir("cs451-attacks-")
+    home_secret = Path.home() / HOME_SECRET          # what the grader keeps in its home (keys, tokens)
+    home_secret.write_text("the grader's own\n")
+    home_secret.chmod(0o600)
     yield root
+    home_secret.unlink(missing_ok=True)
     shutil.rmtree(root, ignore_errors=True)
+
+
+#: A private file the module puts in the grader's home. Not the home folder itself: where the kit lives under it
+#: (a clone in /root, as on a fresh machine), bubblewrap makes the path to the kit's environment inside the
+#: sandbox, so a submission may list a /root that holds nothing but that path.
+HOME_SECRET = ".cs451-attack-home-secret"
 
 
 PATHS = ["local", "roster", "gradescope-bubblewrap", "gradescope-uid"]
@@ -144,7 +154,8 @@ def secrets(gradescope) -> list[str]:
     return [str(KIT_ROOT / "reference" / "sphere" / "camera.py"), str(KIT_ROOT / "autograder" / "sphere" / "hidden.py"),
             str(KIT_ROOT / ".git" / "HEAD"), str(KIT_ROOT / ".cs451-cache"),
             str(kit / "reference" / "sphere" / "camera.py"), str(kit / "autograder" / "sphere" / "truth.py"),
-            str(kit / ".cs451-cache"), str(gradescope[0] / "source"), "/root", "/etc/shadow"]
+            str(kit / ".cs451-cache"), str(gradescope[0] / "source"), str(Path.home() / HOME_SECRET),
+            "/etc/shadow"]
 
 
 def layout_secrets(gradescope) -> list[str]:

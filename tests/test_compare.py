@@ -2,8 +2,12 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
+from PIL import Image
 
 from cs451.compare import ImageTolerance, compare_images
+
+from conftest import assert_images_match
 
 
 def disk(shift=0, colour=(0.3, 0.9, 0.5), size=64):
@@ -40,3 +44,18 @@ def test05_nan_and_shape_fail_with_a_reason():
     assert "NaN" in compare_images(disk(), bad).message
     r = compare_images(disk(), np.zeros((32, 64, 3)))
     assert not r.passed and "shape" in r.message
+
+
+def test_a_failing_image_test_points_at_a_picture_of_where_it_differs(tmp_path, monkeypatch):
+    monkeypatch.setenv("CS451_TEST_PICTURES", str(tmp_path))
+    target = np.zeros((40, 60, 3))
+    assert assert_images_match(target, target.copy(), ImageTolerance(), "same").passed
+    assert not list(tmp_path.iterdir()), "a passing comparison writes nothing"
+    mine = target.copy()
+    mine[10:20, 10:30] = 0.5
+    with pytest.raises(AssertionError, match="difference picture: .*a-wrong-patch.png") as err:
+        assert_images_match(target, mine, ImageTolerance(), "a wrong patch")
+    picture = np.asarray(Image.open(tmp_path / "a-wrong-patch.png"))
+    assert picture.shape[1] > 4 * 60, str(err.value)            # four panels side by side
+    third = picture[:, 2 * 64 + 20:2 * 64 + 40]                  # the grader's error map is red where it differs
+    assert (third[..., 0] > 200).any() and str(tmp_path) in str(err.value)

@@ -26,6 +26,8 @@ from PIL import Image
 
 import fixed_function
 from cs451.compare import ImageTolerance, compare_images
+
+from conftest import assert_images_match
 from cs451.grading.loader import load_tests
 from cs451 import KIT_ROOT
 from cs451.impl import load_impl
@@ -95,8 +97,7 @@ def _kit_render(tmp_path: Path, size: tuple[int, int]) -> np.ndarray:
 @pytest.mark.parametrize("size", SIZES, ids=[f"{w}x{h}" for w, h in SIZES])
 def test01_cs451_render_sphere_matches_the_notes_program(notes_frames, tmp_path, size):
     notes, kit = notes_frames["notes"][size], _kit_render(tmp_path, size)
-    comparison = compare_images(notes, kit, ImageTolerance())
-    assert comparison.passed, f"{size}: {comparison.message}"
+    assert_images_match(notes, kit, ImageTolerance(), f"notes-program-{size[0]}x{size[1]}", ("the notes' program", "cs451"))
     assert np.abs(notes - kit).max() <= 2 / 255 + 1e-9, "the kit and the notes' program should agree to rounding"
 
 
@@ -143,8 +144,7 @@ def test04_the_orrery_is_drawn_as_the_fixed_function_pipeline_draws_it(fixed):
     impl = _reference()
     kit = np.round(s1.render(scene, impl, (400, 400), shading="gouraud") * 255) / 255
     truth = fixed_function.render(scene, (400, 400))
-    comparison = compare_images(truth, kit, ImageTolerance())
-    assert comparison.passed, comparison.message
+    assert_images_match(truth, kit, ImageTolerance(), "orrery", ("fixed-function", "cs451"))
     assert (truth.max(axis=2) > 0.05).mean() > 0.03, "the orrery should fill part of the frame"
     # and the comparison sees the transforms: the same calls each multiplied on the left put the planets elsewhere
     cam = scene.camera

@@ -117,8 +117,12 @@ def known_row(p: dict, rng: np.random.Generator, kind: str, task: str, rtol: flo
         want = truths.polygon_disk(radius, height, sides)
         shown = f"a point under a coaxial {sides}-gon of radius {radius:g} at height {height:g} (F = {want:.5f})"
         entries = [list(range(1, sides + 1))]
+    # H6 fixes the trusted hemicube row of two opposed squares: from an unrotated hemicube, whose cell edges line up
+    # with the squares' edges at some sizes, that row aliases, and the reference's own fix lands 2.2-2.6% off the
+    # closed form on 10 of 80 fresh cases (0.2% allowed); from rotated hemicubes all 80 are within 0.011%.
+    rotate = True if (kind, task) == ("c11", "H6") else p["rotate"]
     test = known_row_test("fresh", task, 1, quads, p["rows"][0], entries, [want], rtol, resolution=p["resolution"],
-                          rotate=p["rotate"])
+                          rotate=rotate)
     return Case(test.params, shown, test.check)
 
 

@@ -28,13 +28,13 @@ from typing import Callable
 
 from ..errors import KitError
 from .listing import Listing, read_listing
+from .inline import inline_html
 
 DECK_FILE = re.compile(r"^(\d\d)-([a-z][a-z0-9-]*)\.md$")
 HEADING = re.compile(r"^(#{1,3})\s+(.*)$")
 ITEM = re.compile(r"^(\s*)([-*]|\d+\.)\s+(.*)$")
 IMAGE_LINE = re.compile(r"^!\[([^\]]*)\]\(([^)\s]+)\)(\{[^}]*\})?\s*$")
 ATTRIBUTE = re.compile(r"^(height|width)=(\d+)(%?)$")
-LINK = re.compile(r"\[([^\]]+)\]\(([^)\s]+)\)")
 POINTER = re.compile(r"\s*\[\[(.+?)\]\]\s*$")
 FENCE = "```"
 CODE_LANGUAGES = {"", "python", "glsl", "c", "text", "sh", "json"}
@@ -89,60 +89,6 @@ def deck_name(path: Path) -> str:
 
 
 # -- inline text -------------------------------------------------------------------------------------
-
-def _inline(text: str, where: str) -> str:
-    """One line or paragraph of text as HTML: code spans and math first (nothing inside them is markup)."""
-    out, i, plain = [], 0, []
-
-    def flush() -> None:
-        if plain:
-            out.append(_markup(escape("".join(plain), quote=False), where))
-            plain.clear()
-    while i < len(text):
-        ch = text[i]
-        if ch == "\\" and text[i + 1:i + 2] == "$":
-            plain.append("$")
-            i += 2
-        elif ch == "`":
-            end = text.find("`", i + 1)
-            if end < 0:
-                raise KitError(f"{where}: a ` opens code that no ` closes")
-            flush()
-            out.append(f"<code>{escape(text[i + 1:end])}</code>")
-            i = end + 1
-        elif ch == "$":
-            end = i + 1
-            while True:
-                end = text.find("$", end)
-                if end < 0 or text[end - 1] != "\\":
-                    break
-                end += 1
-            tex = text[i + 1:end] if end > 0 else ""
-            if end < 0 or not tex.strip() or tex != tex.strip():
-                raise KitError(f"{where}: a $ opens math that no $ closes (write \\$ for a dollar sign)")
-            flush()
-            out.append(f'<span class="math inline" data-source="{escape(where)}">{escape(tex)}</span>')
-            i = end + 1
-        else:
-            plain.append(ch)
-            i += 1
-    flush()
-    return "".join(out)
-
-
-def _markup(html: str, where: str) -> str:
-    if "![" in html:
-        raise KitError(f"{where}: an image goes on a line of its own: ![caption](figure:NAME)")
-
-    def link(m: re.Match) -> str:
-        target = m.group(2)
-        if not target.startswith(("https://", "http://", "#")):
-            raise KitError(f"{where}: link {target!r}: a deck links to web pages (https://…) or slides (#/3) only")
-        return f'<a href="{target}">{m.group(1)}</a>'
-    html = LINK.sub(link, html)
-    html = re.sub(r"\*\*(\S(?:.*?\S)?)\*\*", r"<strong>\1</strong>", html)
-    html = re.sub(r"(?<![\w*])\*(\S(?:.*?\S)?)\*(?![\w*])", r"<em>\1</em>", html)
-    return html
 
 
 # -- blocks ------------------------------------------------------------------------------------------
@@ -228,7 +174,7 @@ class _Reader:
             heading = HEADING.match(t)
             if heading:
                 level = len(heading.group(1))
-                out.append(f"<h{level}>{_inline(heading.group(2).strip(), self.where(n))}</h{level}>")
+                out.append(f"<h{level}>{inline_html(heading.group(2).strip(), self.where(n))}</h{level}>")
                 k += 1
                 continue
             image = IMAGE_LINE.match(t.strip())
@@ -247,7 +193,7 @@ class _Reader:
             while k < len(lines) and lines[k][1].strip() and not self._starts_block(lines[k][1]):
                 para.append(lines[k][1].strip())
                 k += 1
-            out.append(f"<p>{_inline(' '.join(para), self.where(n))}</p>")
+            out.append(f"<p>{inline_html(' '.join(para), self.where(n))}</p>")
         return "\n".join(out)
 
     @staticmethod
@@ -298,7 +244,7 @@ class _Reader:
             while children_end < hi and items[children_end][0] > indent:
                 children_end += 1
             inner = self._nest(items, j + 1, children_end) if children_end > j + 1 else ""
-            html.append(f"<li>{_inline(text, self.where(n))}{inner}</li>")
+            html.append(f"<li>{inline_html(text, self.where(n))}{inner}</li>")
             j = children_end
         html.append(f"</{tag}>")
         return "".join(html)
@@ -324,7 +270,7 @@ class _Reader:
                 raise KitError(f"{self.where(line)}: this row has {len(row)} cells, the table {width}")
             tag = "th" if r == 0 else "td"
             styles = [f' style="text-align:{a}"' if a else "" for a in aligns]
-            html.append("<tr>" + "".join(f"<{tag}{st}>{_inline(c, self.where(line))}</{tag}>"
+            html.append("<tr>" + "".join(f"<{tag}{st}>{inline_html(c, self.where(line))}</{tag}>"
                                          for c, st in zip(row, styles)) + "</tr>")
         html.append("</table>")
         out.append("".join(html))
@@ -351,7 +297,7 @@ class _Reader:
             self.deck.images[target] = path
         src = self.resolve(target, where) if self.resolve else ""
         style_attr = f' style="{";".join(style)}"' if style else ""
-        cap = f"<figcaption>{_inline(caption, where)}</figcaption>" if caption else ""
+        cap = f"<figcaption>{inline_html(caption, where)}</figcaption>" if caption else ""
         return (f'<figure class="figure" data-figure="{escape(target)}"><img src="{src}" alt="{escape(caption)}"'
                 f"{style_attr}>{cap}</figure>")
 
@@ -406,7 +352,7 @@ class _Reader:
                 text = text[:pointer.start()].rstrip()
             badges = "".join(f'<span class="pointer">{p}</span>' for p in marks)
             rows.append(f'<div class="step" style="padding-left:{indent * 0.6:.1f}em">'
-                        f"{_inline(text, self.where(m))}{badges}</div>")
+                        f"{inline_html(text, self.where(m))}{badges}</div>")
         return f'<div class="pseudo">{"".join(rows)}</div>'
 
     def point(self, line: int, snippet: str) -> int:

@@ -48,6 +48,7 @@ from ...imageio import to_uint8
 from ...scene import Sphere, load_scene
 from .. import whitted as W
 from ..base import functions_replaced
+from .ray_tree import LEGEND, RAY_COLOURS, SHADOW_COLOURS, Pinhole, RayTree, TracedRay
 
 #: The most rays one piece hands to W11 (its memory); below that, a piece is what the last one says fits in
 #: half a step.
@@ -56,12 +57,6 @@ PIECE_RAYS = 1 << 18
 MIN_FRAME_WIDTH = 640
 #: Block size of the first, coarsest pass (one pixel traced per block).
 FIRST_BLOCK = 16
-
-#: Colours of the ray tree, by kind of ray, and of shadow rays by how much light they let through.
-RAY_COLOURS = {"camera": (255, 255, 255), "reflection": (0, 225, 255), "refraction": (255, 80, 255),
-               "ray": (210, 210, 210)}
-SHADOW_COLOURS = {"lit": (80, 255, 80), "dimmed": (255, 170, 30), "blocked": (255, 40, 40)}
-LEGEND = "tree: cyan reflected | magenta refracted | shadow rays: green lit, orange through glass, red blocked"
 
 
 @dataclass(frozen=True)
@@ -81,102 +76,6 @@ class _Render:
     image: np.ndarray
     pos: int = 0
     level: int = 0
-
-
-@dataclass
-class _Ray:
-    kind: str                      # camera, reflection, refraction, ray (no parent found)
-    start: np.ndarray
-    end: np.ndarray                # the hit, or a scene's length along a miss
-    hit: bool
-    parent: int | None
-
-
-@dataclass
-class RayTree:
-    """One pixel's rays as the submission's W11 cast them: its W5 queries (rays) and W7 queries (shadow rays)."""
-    pixel: tuple[int, int]
-    rays: list[_Ray]
-    shadows: list[tuple[np.ndarray, np.ndarray, float]]      # origin, light sample, light let through (max RGB)
-    counters: dict[str, int]                                 # W11's own counters for this one camera ray
-
-    def count(self, kind: str) -> int:
-        return sum(r.kind == kind for r in self.rays)
-
-    def shadow_state(self, passed: float) -> str:
-        return "blocked" if passed <= 1e-9 else ("lit" if passed >= 1 - 1e-9 else "dimmed")
-
-    def summary(self) -> list[str]:
-        """Two caption lines: the tree as drawn, and what the submission's W11 counted for this camera ray."""
-        blocked = sum(self.shadow_state(p) == "blocked" for _, _, p in self.shadows)
-        hits = sum(r.hit for r in self.rays)
-        c = self.counters
-        return [f"pixel ({self.pixel[0]}, {self.pixel[1]}): {self.count('reflection')} reflected, "
-                f"{self.count('refraction')} refracted, {len(self.shadows)} shadow rays ({blocked} blocked), {hits} hits",
-                f"W11's counters for it: {c.get('camera', 0)} camera, {c.get('reflection', 0)} reflection, "
-                f"{c.get('transmission', 0)} transmission, {c.get('shadow', 0)} shadow"]
-
-
-class Pinhole:
-    """Where world points land in the image: a homography of directions fitted to the submission's camera rays."""
-
-    def __init__(self, origins: np.ndarray, directions: np.ndarray, width: int, height: int, k: int):
-        cols, rows = (np.unique(np.linspace(0, n * k - 1, 7).round().astype(int)) for n in (width, height))
-        idx = (rows[:, None] * width * k + cols[None, :]).ravel()
-        d = directions[idx]
-        u = np.tile((cols + 0.5) / k / width, len(rows))             # in image widths and heights: well conditioned
-        v = np.repeat((rows + 0.5) / k / height, len(cols))
-        zero = np.zeros_like(d)
-        a = np.concatenate([np.hstack([d, zero, -u[:, None] * d]), np.hstack([zero, d, -v[:, None] * d])])
-        m = np.linalg.svd(a)[2][-1].reshape(3, 3)
-        if (m @ d[0])[2] < 0:
-            m = -m
-        self.m, self.width, self.height = m, width, height
-        self.eye = origins.mean(axis=0)
-        q = d @ m.T
-        with np.errstate(divide="ignore", invalid="ignore"):
-            err = np.hypot(q[:, 0] / q[:, 2] - u, q[:, 1] / q[:, 2] - v) * max(width, height)
-        spread = float(np.ptp(origins, axis=0).max())
-        #: whether the camera rays are a pinhole's (one eye, directions through a plane): else no tree is drawn
-        self.ok = bool(np.all(q[:, 2] > 0) and np.nanmax(err) < 0.05 and spread <= 1e-9 * (1 + np.abs(self.eye).max()))
-
-    def segment(self, a: np.ndarray, b: np.ndarray) -> tuple[tuple[float, float], tuple[float, float]] | None:
-        """The part of segment a-b in front of the eye, in image pixels (x right, y down), clipped near the image."""
-        qa, qb = self.m @ (a - self.eye), self.m @ (b - self.eye)
-        eps = 1e-9 * max(np.abs(qa).max(), np.abs(qb).max(), 1e-300)
-        if qa[2] < eps and qb[2] < eps:
-            return None
-        if qa[2] < eps:
-            qa = qa + (eps - qa[2]) / (qb[2] - qa[2]) * (qb - qa)
-        elif qb[2] < eps:
-            qb = qb + (eps - qb[2]) / (qa[2] - qb[2]) * (qa - qb)
-        scale = np.array([self.width, self.height])
-        return _clip(qa[:2] / qa[2] * scale, qb[:2] / qb[2] * scale, self.width, self.height)
-
-    def point(self, p: np.ndarray) -> tuple[float, float] | None:
-        q = self.m @ (np.asarray(p, float) - self.eye)
-        return (q[0] / q[2] * self.width, q[1] / q[2] * self.height) if q[2] > 0 else None
-
-
-def _clip(a: np.ndarray, b: np.ndarray, width: int, height: int) -> tuple[tuple[float, float], tuple[float, float]] | None:
-    """Liang-Barsky: segment a-b cut to a margin around the image (Pillow draws nothing sensible far outside it)."""
-    lo, hi = np.array([-2.0 * width, -2.0 * height]), np.array([3.0 * width, 3.0 * height])
-    t0, t1, d = 0.0, 1.0, b - a
-    for axis in range(2):
-        for p, q in ((-d[axis], a[axis] - lo[axis]), (d[axis], hi[axis] - a[axis])):
-            if p == 0:
-                if q < 0:
-                    return None
-                continue
-            t = q / p
-            if p < 0:
-                t0 = max(t0, t)
-            else:
-                t1 = min(t1, t)
-    if t0 > t1:
-        return None
-    s, e = a + t0 * d, a + t1 * d
-    return (float(s[0]), float(s[1])), (float(e[0]), float(e[1]))
 
 
 def progressive_order(width: int, height: int) -> tuple[np.ndarray, list[int], list[int]]:
@@ -392,8 +291,8 @@ class WhittedDemo:
         self._frame = None
         return RayTree((x, y), rays, lights, dict(ts.counters))
 
-    def _rays(self, calls: list[list[np.ndarray]]) -> list[_Ray]:
-        rays: list[_Ray] = []
+    def _rays(self, calls: list[list[np.ndarray]]) -> list[TracedRay]:
+        rays: list[TracedRay] = []
         points: list[np.ndarray] = []           # hit points so far, with their ray, normal and direction
         owners: list[tuple[int, np.ndarray, np.ndarray]] = []
         for number, (o, d, t, prim, normals) in enumerate(calls):
@@ -409,7 +308,7 @@ class WhittedDemo:
                         kind = "reflection" if (d[j] @ n) * (incoming @ n) < 0 else "refraction"
                 hit = bool(np.isfinite(t[j]) and prim[j] >= 0)
                 end = o[j] + (t[j] if hit else self.reach) * d[j]
-                rays.append(_Ray(kind, o[j], end, hit, parent))
+                rays.append(TracedRay(kind, o[j], end, hit, parent))
                 if hit:
                     found.append((end, (len(rays) - 1, normals[j], d[j])))
             points += [p for p, _ in found]
