@@ -32,15 +32,26 @@ from .whitted import _query_rays, _torus_only
 from .whitted_kernels import frame_rays, reference_parts
 
 
-def _module_at(rev: str, path: str, name: str, folder: Path) -> ModuleType:
-    """``path`` as it was at ``rev``, imported as ``name`` (its relative imports made absolute)."""
-    try:
-        text = subprocess.run(["git", "-C", str(KIT_ROOT), "show", f"{rev}:{path}"], check=True, capture_output=True,
-                              text=True).stdout
-    except subprocess.CalledProcessError as err:
-        raise SystemExit(f"whitted_against: git has no {path} at {rev!r}: {err.stderr.strip()}")
+#: Where the speed layer's files were: in the stage's package since issue 35, in the reference before.
+HOMES = ("cs451/stages/whitted/accel", "reference/whitted")
+
+
+def _module_at(rev: str, file_name: str, name: str, folder: Path) -> ModuleType:
+    """``file_name`` of the speed layer as it was at ``rev``, imported as ``name`` (its relative imports made
+    absolute, to today's running.py and tracescene.py)."""
+    errors = []
+    for home in HOMES:
+        try:
+            text = subprocess.run(["git", "-C", str(KIT_ROOT), "show", f"{rev}:{home}/{file_name}"], check=True,
+                                  capture_output=True, text=True).stdout
+            break
+        except subprocess.CalledProcessError as err:
+            errors.append(err.stderr.strip())
+    else:
+        raise SystemExit(f"whitted_against: git has no {file_name} of the Whitted kernels at {rev!r}: {errors[-1]}")
+    text = text.replace("from .running import", "from cs451.stages.whitted.accel.running import")
     file = folder / f"{name}.py"
-    file.write_text(text.replace("from .running import", "from reference.whitted.running import"))
+    file.write_text(text.replace("from ....tracescene import", "from cs451.tracescene import"))
     spec = importlib.util.spec_from_file_location(name, file)
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
@@ -129,8 +140,8 @@ def compare(rev: str, repeats: int = 15) -> list[dict]:
     rows: list[dict] = []
     bar = Progress(f"Whitted kernels against {rev}", 15)
     with tempfile.TemporaryDirectory() as tmp:
-        mods = (_module_at(rev, "reference/whitted/kernels.py", "kernels_then", Path(tmp)),
-                _module_at(rev, "reference/whitted/hierarchy.py", "hierarchy_then", Path(tmp)))
+        mods = (_module_at(rev, "kernels.py", "kernels_then", Path(tmp)),
+                _module_at(rev, "hierarchy.py", "hierarchy_then", Path(tmp)))
         scene = _torus_only()
         ts = stage.prepare(scene, impl, hierarchy=True)
         then, now = _pair(impl, mods, ts)

@@ -1,8 +1,8 @@
 """Driving the Whitted reference's compiled kernels directly, for the bench: closest-hit and shadow-ray
 queries without the stage's scaffolding, a thread count for a while, and the rays a frame casts.
 
-These reach into the reference's own modules (kernels, hierarchy, running, bvh, tracer), which are not
-part of the stage's interface: the bench measures the reference, not a submission.
+These reach into the reference's speed layer (``cs451/stages/whitted/accel/``: kernels, hierarchy, running,
+queries), which is not part of the stage's interface: the bench measures the reference, not a submission.
 """
 from __future__ import annotations
 
@@ -15,6 +15,8 @@ from typing import Callable, Iterator
 
 import numpy as np
 
+from cs451.stages import whitted as stage
+from cs451.stages.base import functions_replaced
 from cs451.tracescene import TraceScene
 
 
@@ -29,10 +31,10 @@ def best_of(fn: Callable[[], object], repeats: int) -> float:
 
 
 def reference_parts(impl: ModuleType) -> SimpleNamespace:
-    """The reference's compiled pieces the bench drives directly."""
-    part = lambda name: importlib.import_module(f"{impl.__name__}.{name}")
+    """The reference's compiled pieces the bench drives directly, and the reference itself (``impl``)."""
+    part = lambda name: importlib.import_module(f"cs451.stages.whitted.accel.{name}")
     return SimpleNamespace(kernels=part("kernels"), hierarchy=part("hierarchy"), running=part("running"),
-                           bvh=part("bvh"), tracer=part("tracer"))
+                           queries=part("queries"), impl=impl)
 
 
 def closest_queries(ref: SimpleNamespace, ts: TraceScene) -> Callable[[np.ndarray, np.ndarray], tuple]:
@@ -74,26 +76,22 @@ def frame_rays(ref: SimpleNamespace, ts: TraceScene, o: np.ndarray, d: np.ndarra
     and refracted one) and shadow (origins, unit directions, lengths).
 
     Found by tracing the frame bounce by bounce (the path the frame kernel replaces, same rays) with the
-    tracer's two queries wrapped to record what they are asked.
+    tracer's two queries wrapped to record what they are asked (a replaced W5 or W7 keeps W11 off the fused
+    frame kernel; the recorders pass each batch on to the compiled query).
     """
     asked: dict[str, list] = {"closest": [], "shadow": []}
-    closest_hit, shadow_transmission = ref.tracer.closest_hit, ref.tracer.shadow_transmission
 
-    def closest(scene, origins, directions):
-        asked["closest"].append((origins, directions))
-        return closest_hit(scene, origins, directions)
+    def recording(kind: str) -> Callable:
+        def wrap(own: Callable) -> Callable:
+            def asking(scene: TraceScene, origins: np.ndarray, other: np.ndarray) -> object:
+                asked[kind].append((origins, other))
+                return own(scene, origins, other)
+            return asking
+        return wrap
 
-    def shadow(scene, origins, targets):
-        asked["shadow"].append((origins, targets))
-        return shadow_transmission(scene, origins, targets)
-
-    saved = ref.bvh.FRAME_KERNEL
-    ref.tracer.closest_hit, ref.tracer.shadow_transmission, ref.bvh.FRAME_KERNEL = closest, shadow, False
-    try:
-        ref.tracer.trace(ts, o, d)
-    finally:
-        ref.tracer.closest_hit, ref.tracer.shadow_transmission, ref.bvh.FRAME_KERNEL = (closest_hit, shadow_transmission,
-                                                                                         saved)
+    with stage.STAGE.accelerated(ref.impl), \
+            functions_replaced(stage.STAGE, ref.impl, {"W5": recording("closest"), "W7": recording("shadow")}):
+        ref.impl.trace(ts, o, d)
     co = np.ascontiguousarray(np.concatenate([a for a, _ in asked["closest"]]))
     cd = np.ascontiguousarray(np.concatenate([b for _, b in asked["closest"]]))
     so = np.ascontiguousarray(np.concatenate([a for a, _ in asked["shadow"]] or [np.zeros((0, 3))]))

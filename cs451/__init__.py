@@ -12,20 +12,26 @@ __version__ = "0.1.0"
 
 #: The engine's own folder (what the grader copies into a sandbox and a release ships).
 ENGINE_DIR = Path(__file__).resolve().parent
-#: Engine folders only lecturers use (the slides' builder, its vendored reveal.js and KaTeX): never in a student
-#: release or a grading sandbox, and not part of the answers' version. A stage's own deck figures
-#: (``stages/<stage>/figures.py``, ``figure_*.py``) are lecturers' too: see :func:`lecturer_only`.
-LECTURER_ONLY = ("slides",)
+#: Engine folders only instructors use (the slides' builder, its vendored reveal.js and KaTeX): never in a student
+#: release or a grading sandbox, and not part of the answers' version. Within a stage's package, its deck figures
+#: (``stages/<stage>/figures.py``, ``figure_*.py``) and its speed layer (``stages/<stage>/accel/``: compiled code
+#: that does tasks' work) are instructors' too: see :func:`instructor_only`.
+INSTRUCTOR_ONLY = ("slides",)
+#: A stage's own folder of compiled speed-ups for its reference (one declared hook: ``Stage.accelerator``).
+SPEED_LAYER = "accel"
 
 
-def lecturer_only(path: Path) -> bool:
-    """Whether a file or folder of the engine is only for lecturers (the slides, and every stage's deck figures,
-    which draw from the reference): left out of releases, sandboxes and the answers' version."""
+def instructor_only(path: Path) -> bool:
+    """Whether a file or folder of the engine is only for instructors (the slides and every stage's deck figures,
+    which draw from the reference; a stage's speed layer, which would answer its tasks): left out of releases,
+    sandboxes and the answers' version."""
     try:
         parts = path.resolve().relative_to(ENGINE_DIR).parts
     except ValueError:
         return False
-    if parts and parts[0] in LECTURER_ONLY:
+    if parts and parts[0] in INSTRUCTOR_ONLY:
+        return True
+    if len(parts) >= 3 and parts[0] == "stages" and parts[2] == SPEED_LAYER:
         return True
     return len(parts) == 3 and parts[0] == "stages" and (parts[2] == "figures.py" or parts[2].startswith("figure_"))
 

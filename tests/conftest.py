@@ -85,13 +85,13 @@ def reference_grade_of():
 
 
 @pytest.fixture(autouse=True)
-def numpy_path_until_a_test_asks():
-    """The reference tracer latches onto its compiled kernels after its first large batch (``bvh._compiled``):
-    reset the latch before every test, so which path a test runs never depends on the tests before it."""
+def speed_layers_choose_as_in_a_fresh_process():
+    """A stage's speed layer runs every batch compiled once a large one has paid for the kernels: forget that
+    before every test, so which path a test runs never depends on the tests before it."""
     import sys
     for name, module in list(sys.modules.items()):
-        if name.endswith(".bvh") and callable(getattr(module, "use_compiled", None)) and hasattr(module, "_compiled"):
-            module._compiled[0] = False
+        if name.startswith("cs451.stages.") and callable(getattr(module, "forget_compiled", None)):
+            module.forget_compiled()
     yield
 
 

@@ -31,7 +31,7 @@ from test_containers import readme_commands
 pytestmark = [pytest.mark.seat, pytest.mark.skipif(missing_tools() is not None, reason=str(missing_tools()))]
 
 KIT = "/root/cs451-kit"
-#: What first use announces when it compiles (reference/whitted/running.py): after set-up, nothing may.
+#: What first use announces when it compiles (cs451/stages/whitted/accel/running.py): after set-up, nothing may.
 COMPILING = "compiling the ray tracer's kernels"
 #: The optional peers (pyproject's extra ``peers``): the README's set-up does not install them, so their checks skip.
 OPTIONAL_PEERS = ("mitsuba", "embreex", "Embree, an optional peer")

@@ -216,7 +216,7 @@ def test10_a_compiled_size_refines_through_the_compiled_frame_and_the_switches_s
     """At 160 × 120 the camera rays are a large batch, so the reference's W11 runs its compiled frame (which calls
     neither W5 nor W7) on every piece; while the shadow switch or the ray tree replaces W7 or W5 it must call them."""
     import importlib
-    frame = importlib.import_module(REF.__name__ + ".frame")
+    frame = importlib.import_module("cs451.stages.whitted.accel.frame")
     whole, used = frame.trace_frame, []
     monkeypatch.setattr(frame, "trace_frame", lambda *a, **k: used.append(len(a[1])) or whole(*a, **k))
     demo = WhittedDemo(REF, "whitted", (160, 120))
@@ -233,3 +233,21 @@ def test10_a_compiled_size_refines_through_the_compiled_frame_and_the_switches_s
         demo.step(0.05)
     assert used == [] and demo.render.scene.counters["shadow"] == 0 and demo.image().mean() > lit.mean()
     assert demo.tree.shadows == []
+
+
+def test15_the_demo_and_the_deck_build_one_pixels_tree_alike():
+    """One tree builder (ray_tree.build_tree): the demo's tree of a pixel (its W11 through the stage, recorded) and
+    the deck's (the reference's render probe, recorded as the grader records it) hold the same rays, kinds and
+    parents, and the same shadow rays."""
+    import json
+    from cs451.scene import BUNDLED_DIR
+    from cs451.stages.whitted.figure_rays import ray_tree
+    demo = WhittedDemo(REF, "whitted", (40, 30))
+    x, y = demo.default_pixel()
+    tree = demo.ray_tree(x, y)
+    deck = ray_tree(json.loads((BUNDLED_DIR / "whitted.json").read_text()), [(x, y)], (40, 30))
+    drawn = [r for r in deck if r["kind"] != "shadow"]
+    assert tree.count("reflection") > 0 and tree.count("refraction") > 0
+    assert [(r.kind, r.parent, r.hit) for r in tree.rays] == [(r["kind"], r["parent"], r["hit"]) for r in drawn]
+    assert all(np.allclose(r.end, d["end"]) for r, d in zip(tree.rays, drawn) if r.hit)   # misses: each its own reach
+    assert len(tree.shadows) == sum(r["kind"] == "shadow" for r in deck) > 0

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import importlib
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ from cs451 import tracescene
 from cs451.impl import load_impl, resolve_impl
 from cs451.scene import BUNDLED_DIR, load_scene, parse_scene
 from cs451.stages import whitted
+from cs451.stages.whitted import accel
 
 RAY_COUNTERS = ("camera", "shadow", "reflection", "transmission")
 
@@ -23,19 +25,17 @@ def ref():
 
 
 def part(ref, name: str):
-    return importlib.import_module(f"{ref.__name__}.{name}")
+    """A module of the reference's speed layer (instructor-side, outside the reference)."""
+    return importlib.import_module(f"cs451.stages.whitted.accel.{name}")
 
 
 @contextlib.contextmanager
 def path(ref, compiled: bool, frame: bool = True):
-    """Run the reference on its numpy path, or on the compiled one (whole frames or bounce by bounce)."""
-    bvh = part(ref, "bvh")
-    saved = bvh.COMPILED_RAYS, bvh._compiled[0], bvh.FRAME_KERNEL
-    bvh.COMPILED_RAYS, bvh._compiled[0], bvh.FRAME_KERNEL = (0 if compiled else 10**12), compiled, frame
-    try:
+    """Run the reference on its numpy path, or through its one speed hook on the compiled one (whole frames
+    or bounce by bounce), whatever the batch size."""
+    mode = "numpy" if not compiled else ("compiled" if frame else "bounces")
+    with accel.forced(mode), whitted.STAGE.accelerated(ref):
         yield
-    finally:
-        bvh.COMPILED_RAYS, bvh._compiled[0], bvh.FRAME_KERNEL = saved
 
 
 def traced(ref, scene, size, **modes):
@@ -106,18 +106,20 @@ def test03_a_hierarchy_is_built_once_per_geometry(ref):
     # another geometry is another hierarchy
     ts = tracescene.build(scene)
     lo, hi = ts.bounds()
-    ref.build_bvh(lo * 2.0, hi * 2.0)
+    whitted.STAGE.call(ref, "W4", lo * 2.0, hi * 2.0)
     assert hierarchy.cache_counts()["hierarchies_built"] == end["hierarchies_built"] + 1
 
 
 def test04_a_cached_hierarchy_is_what_a_fresh_build_gives_and_cannot_be_spoilt(ref):
     hierarchy = part(ref, "hierarchy")
     lo, hi = tracescene.build(load_scene("rippled-torus")).bounds()
-    first = ref.build_bvh(lo, hi)
-    fresh = dict(zip(tracescene.BVH_KEYS, hierarchy.build(lo, hi, part(ref, "bvh").LEAF_SIZE)))
+    first = whitted.STAGE.call(ref, "W4", lo, hi)
+    leaf = importlib.import_module(f"{ref.__name__}.bvh").LEAF_SIZE
+    assert part(ref, "queries").LEAF_SIZE == leaf
+    fresh = dict(zip(tracescene.BVH_KEYS, hierarchy.build(lo, hi, leaf)))
     assert all(np.array_equal(first[k], fresh[k]) for k in tracescene.BVH_KEYS)
     first["order"][:] = 0                                  # a caller scribbles on what it was handed
-    again = ref.build_bvh(lo, hi)
+    again = whitted.STAGE.call(ref, "W4", lo, hi)
     assert np.array_equal(again["order"], fresh["order"])
 
 
@@ -215,7 +217,6 @@ def test10_the_bench_records_every_ray_a_frame_casts(ref):
         assert len(rays["closest"][0]) == c["camera"] + c["reflection"] + c["transmission"]
         assert len(rays["shadow"][0]) == c["shadow"] > 0
         assert np.allclose(np.linalg.norm(rays["shadow"][1], axis=1), 1.0)
-        assert part(ref, "bvh").FRAME_KERNEL                 # put back as it was
 
 
 def test11_mitsuba_is_handed_the_same_camera_and_geometry(ref, tmp_path):
@@ -292,3 +293,35 @@ def test14_prefetching_a_waiting_child_changes_nothing(ref):
     for q, cnt in ((0, -1), (1, -1), (0, 4), (3, 1), (10**6, -1), (10**6, 2)):
         assert fetch(nf, ltri, q, cnt) == before
     assert np.array_equal(nf, np.arange(128, dtype=np.float32))
+
+
+def test15_the_reference_reads_as_numpy_and_asks_for_speed_by_one_hook():
+    """No file of the student's reference compiles anything or reaches into the speed layer; its package declares
+    the hook once, inside a solution region (so a starter never carries it)."""
+    from cs451 import KIT_ROOT
+    folder = KIT_ROOT / "reference" / "whitted"
+    for file in folder.glob("*.py"):
+        imports = [line for line in file.read_text().splitlines() if line.strip().startswith(("import ", "from "))]
+        assert not [line for line in imports if "numba" in line or "accel" in line or "cs451.stages" in line], file.name
+    init = (folder / "__init__.py").read_text()
+    assert init.count("ACCELERATED = True") == 1
+    start, hook = init.index("# BEGIN SOLUTION"), init.index("ACCELERATED = True")
+    assert start < hook < init.index("# END SOLUTION", start)
+
+
+def test16_the_hook_is_honoured_for_the_kits_reference_only(ref, tmp_path):
+    """A copy of the reference elsewhere (a submission declaring the hook) runs its own code whatever it declares:
+    the speed layer does tasks' work, so no submission may have it; and no release or sandbox holds it."""
+    import shutil
+    from cs451 import instructor_only
+    copy = tmp_path / "whitted"
+    shutil.copytree(resolve_impl("reference", "whitted"), copy, ignore=shutil.ignore_patterns("__pycache__"))
+    theirs = load_impl(copy, "whitted")
+    assert theirs.ACCELERATED is True
+    own_trace = theirs.trace
+    with accel.forced("compiled"), whitted.STAGE.accelerated(theirs):
+        assert theirs.trace is own_trace
+    with accel.forced("compiled"), whitted.STAGE.accelerated(ref):
+        assert ref.trace.__module__ == accel.__name__
+    assert ref.trace.__module__ != accel.__name__, "the wrappers go when the block ends"
+    assert instructor_only(Path(accel.__file__).parent) and instructor_only(Path(accel.__file__))

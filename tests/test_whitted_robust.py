@@ -178,17 +178,13 @@ def test07_camera_inside_a_glass_sphere(ref):
 def both_paths(ref, ts, o, d) -> tuple[tuple, tuple]:
     """(t, primitive, normal, shadow transmittance) of each ray by the numpy path and by the compiled kernels;
     the shadow rays run from halfway to each hit (or one unit along a miss) to the first light."""
+    from cs451.stages.whitted import accel
     wave = importlib.import_module(ref.__name__ + ".wavefront")
-    bvh = importlib.import_module(ref.__name__ + ".bvh")
-    saved = bvh.COMPILED_RAYS
-    bvh.COMPILED_RAYS = 0
-    try:
+    with accel.forced("compiled"), whitted.STAGE.accelerated(ref):
         t2, p2, n2 = ref.closest_hit(ts, o, d)
         x = o + np.where(np.isfinite(t2), t2 * 0.5, 1.0)[:, None] * d
         target = np.tile(ts.light_position[0], (len(o), 1))
         s2 = ref.shadow_transmission(ts, x, target)
-    finally:
-        bvh.COMPILED_RAYS = saved
     t1, p1, n1, _, _ = wave.closest(ts, o, d)
     seg = target - x
     dist = np.linalg.norm(seg, axis=1)

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import ENGINE_DIR, KIT_ROOT, lecturer_only
+from .. import ENGINE_DIR, KIT_ROOT, instructor_only
 from ..errors import KitError
 from .probes import run_trusted_probe
 from .spec import TRUTH_MODULES, Outputs, Ref, Test
@@ -30,7 +30,7 @@ def tree_hash(*folders: Path) -> str:
     h = hashlib.sha256()
     for folder in folders:
         for path in sorted(folder.rglob("*.py")):      # no answer comes from the slides or a deck's figures
-            if "__pycache__" not in path.parts and not lecturer_only(path):
+            if "__pycache__" not in path.parts and not instructor_only(path):
                 h.update(path.relative_to(folder).as_posix().encode())
                 h.update(path.read_bytes())
     return h.hexdigest()[:16]

@@ -50,7 +50,7 @@ try:  # not on Windows: there the student copy runs without limits (nothing to p
 except ImportError:  # pragma: no cover
     resource = None  # type: ignore[assignment]
 
-from .. import lecturer_only
+from .. import instructor_only
 from . import cgroups
 from . import preflight
 from .processes import count_processes, drop_to, free_uid, kill_uid, processes_of, remove_ipc, wait_for
@@ -82,7 +82,7 @@ DESCRIPTIONS = {
 def _sandbox_litter(folder: str, names: list[str]) -> set[str]:
     """What a sandbox's copy of the engine leaves out: byte code, and the lecturers' folders (no test imports them)."""
     left = set(shutil.ignore_patterns("*.pyc", "__pycache__")(folder, names))
-    return left | {name for name in names if lecturer_only(Path(folder) / name)}
+    return left | {name for name in names if instructor_only(Path(folder) / name)}
 
 
 # --- the sandbox --------------------------------------------------------------------------

@@ -14,7 +14,7 @@ import json
 import shutil
 from pathlib import Path
 
-from .. import ENGINE_DIR, KIT_ROOT, __version__, lecturer_only
+from .. import ENGINE_DIR, KIT_ROOT, __version__, instructor_only
 from ..copy import MARKER
 from ..errors import KitError
 from ..grading.loader import hidden_summary, load_tests, write_manifest
@@ -46,7 +46,7 @@ __pycache__/
 
 def _engine_litter(folder: str, names: list[str]) -> set[str]:
     """What ``copy_tree("cs451", …)`` leaves out of a release: the usual litter, and what only lecturers use."""
-    return set(LITTER(folder, names)) | {name for name in names if lecturer_only(Path(folder) / name)}
+    return set(LITTER(folder, names)) | {name for name in names if instructor_only(Path(folder) / name)}
 
 WORKFLOW_HEADER = """# Runs the public tests of stage {stage} on every push (GitHub Classroom autograding).
 # Built by `cs451 release {stage}`; the points per task are the public tests' points.

@@ -41,22 +41,6 @@ def encoded(image: np.ndarray, scene: Any) -> np.ndarray:
     return to_uint8(image, scene.image.exposure, scene.image.srgb)
 
 
-@contextlib.contextmanager
-def numpy_path(impl: Any) -> Iterator[None]:
-    """Within the block the reference tracer keeps to its numpy path whatever the batch size (the switches
-    tests/test_whitted_frame.py sets); another implementation runs as it is."""
-    bvh = sys.modules.get(f"{impl.__name__}.bvh")
-    if bvh is None or not hasattr(bvh, "COMPILED_RAYS") or not hasattr(bvh, "_compiled"):
-        yield
-        return
-    saved = bvh.COMPILED_RAYS, bvh._compiled[0]
-    bvh.COMPILED_RAYS, bvh._compiled[0] = 10 ** 12, False
-    try:
-        yield
-    finally:
-        bvh.COMPILED_RAYS, bvh._compiled[0] = saved
-
-
 
 def project(matrix: np.ndarray, points: np.ndarray, size: tuple[int, int]) -> np.ndarray:
     """Pixel coordinates (x right, y down, pixel centres at integers) of points in front of the camera."""

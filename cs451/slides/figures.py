@@ -13,9 +13,9 @@ Change one function of ``reference/hemicube`` and every figure drawn with it is 
 handout and none is. The PNG carries its key and the numbers it shows (a row sum, counters, timings) as
 text chunks: :func:`figure_facts` reads them back.
 
-Ray tracing figures run the reference's plain numpy path (``_numpy_path``): it gives the same colours as
-the compiled kernels (tests/test_whitted_frame.py), takes well under a second at slide sizes, and never
-waits for numba's first compile (~2 minutes on two cores). Not thread-safe: build figures in one thread, or in
+Ray tracing figures run the reference's plain numpy path (its speed layer held off: ``accel.forced``): it gives
+the same colours as the compiled kernels (tests/test_whitted_frame.py), takes well under a second at slide
+sizes, and never waits for numba's first compile (~2 minutes on two cores). Not thread-safe: build figures in one thread, or in
 processes.
 """
 from __future__ import annotations

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from html import escape
 from pathlib import Path
 
+from .. import SPEED_LAYER
 from ..errors import KitError
 
 #: More lines than this do not fit a slide beside pseudo-code: the build asks for a ``from:``/``to:`` range.
@@ -91,15 +92,19 @@ def _highlighted(source: str) -> dict[int, str]:
 
 
 def read_listing(kit_root: Path, target: str, start: str | None, stop: str | None, where: str) -> Listing:
-    """The lines of ``target`` (``reference/<stage>/<file>.py::function``) from ``start`` to ``stop``.
+    """The lines of ``target`` (``reference/<stage>/<file>.py::function``, or a file of a stage's speed layer,
+    ``cs451/stages/<stage>/accel/<file>.py``) from ``start`` to ``stop``.
 
     ``where`` (``slides/x.md:12``) prefixes every error, so a stale slide names itself.
     """
     path_text, sep, qualname = target.partition("::")
     if not sep or not qualname:
         raise KitError(f"{where}: a reference listing names `reference/<stage>/<file>.py::function`, not {target!r}")
-    if not path_text.startswith("reference/") or ".." in Path(path_text).parts or not path_text.endswith(".py"):
-        raise KitError(f"{where}: {path_text}: a listing shows a file of reference/ (reference/<stage>/<file>.py)")
+    parts = Path(path_text).parts
+    speed_layer = len(parts) == 5 and parts[:2] == ("cs451", "stages") and parts[3] == SPEED_LAYER
+    if not (path_text.startswith("reference/") or speed_layer) or ".." in parts or not path_text.endswith(".py"):
+        raise KitError(f"{where}: {path_text}: a listing shows a file of reference/ (reference/<stage>/<file>.py) "
+                       f"or of a stage's speed layer (cs451/stages/<stage>/{SPEED_LAYER}/<file>.py)")
     file = kit_root / path_text
     if not file.is_file():
         raise KitError(f"{where}: {path_text}: no such file")

@@ -14,6 +14,7 @@ import inspect
 import sys
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from pathlib import Path
 from types import ModuleType
 from typing import Any, Callable, Iterator
 
@@ -89,6 +90,8 @@ class Stage:
     #: warm(module) -> [(what, do())]: the steps that compile, once, what a first render or demo of the stage
     #: would compile, so that ``cs451 warm`` (setup.sh) pays it rather than a first render or a lecture
     warm: Callable[[Any], list[tuple[str, Callable[[], Any]]]] | None = None
+    #: the module of the stage's speed layer (instructor-side, see :meth:`accelerated`), or None
+    accelerator: str | None = None
 
     def task(self, task_id: str) -> Task:
         for t in self.tasks:
@@ -100,6 +103,24 @@ class Stage:
         """Call a task's function and check its answer against the task's declared ``returns``."""
         task = self.task(task_id)
         return check_returns(task, student_call(self, impl, task_id, *args), dict(zip(task.params, args)))
+
+    def accelerated(self, impl: Any) -> Any:
+        """A context in which the kit's own reference runs through the stage's speed layer, where the reference
+        asks for it (its package's ``ACCELERATED``), the stage has one and this copy of the kit holds it (no
+        release or sandbox does). Any other implementation runs as it is, whatever it declares: the speed
+        layer does tasks' work, so a submission never gets it."""
+        from contextlib import nullcontext
+        from .. import KIT_ROOT
+        if self.accelerator is None or getattr(impl, "ACCELERATED", False) is not True:
+            return nullcontext()
+        own = (KIT_ROOT / "reference" / self.name).resolve()
+        if Path(getattr(impl, "__file__", "") or "/").resolve().parent != own:
+            return nullcontext()
+        try:
+            layer = importlib.import_module(self.accelerator)
+        except ModuleNotFoundError:
+            return nullcontext()
+        return layer.accelerated(self, impl)
 
     def options(self, scene: Any, **overrides: Any) -> Any:
         """The scene's ``options.<stage>``, validated; ``overrides`` that are not None replace fields."""
@@ -214,11 +235,11 @@ def check_interface(stage: Stage, module: ModuleType) -> list[str]:
 def student_call(stage: Stage, module: Any, task_id: str, *args: Any) -> Any:
     """Call a task's function, turning an unimplemented stub into a one-line KitError."""
     task = stage.task(task_id)
-    fn = getattr(module, task.function, None)
-    if fn is None:
+    if getattr(module, task.function, None) is None:
         raise KitError(f"{task.id} {task.function}() is missing from the submission")
     try:
-        return fn(*args)
+        with stage.accelerated(module):
+            return getattr(module, task.function)(*args)
     except NotImplementedError as err:
         hint = str(err).removeprefix(f"{task.id}: ") or f"see {stage.handout_link(task)}"
         raise KitError(f"{task.id} {task.function}() is not implemented yet: {hint}") from None
@@ -257,16 +278,28 @@ def as_array(value: Any, shape: tuple[int | None, ...], what: str, kind: str = "
     return arr
 
 
+#: Per implementation (its module name), the tasks replaced by :func:`functions_replaced` blocks now running.
+_REPLACED: dict[str, list[str]] = {}
+
+
+def replaced_tasks(impl: Any) -> set[str]:
+    """The tasks of ``impl`` some caller has replaced for now (a speed layer asks before fusing their work)."""
+    return set(_REPLACED.get(impl.__name__, ()))
+
+
 @contextmanager
-def functions_replaced(stage: Stage, impl: Any, wrappers: dict[str, Callable[[Any], Any]]) -> Iterator[None]:
+def functions_replaced(stage: Stage, impl: Any, wrappers: dict[str, Callable[[Any], Any]],
+                       record: bool = True) -> Iterator[None]:
     """Within the block, each task's function is replaced by ``wrappers[task](own)`` in every module of the
     implementation's package that holds it, under whatever name, so that its other functions call the replacement.
 
     How a later task's test gets trusted answers from an earlier task the submission's code calls (W11's trace
-    calling W8 to W10, S7's reshape calling S1), and how the reference's calls are recorded to give them.
+    calling W8 to W10, S7's reshape calling S1), and how the reference's calls are recorded to give them. The
+    tasks are recorded for :func:`replaced_tasks` unless ``record`` is false (the speed layer's own wrappers).
     """
     own = {task: getattr(impl, stage.task(task).function, None) for task in wrappers}
     changed = []
+    made: dict[str, Any] = {}
     prefix = impl.__name__
     for name, module in list(sys.modules.items()):
         if module is None or not (name == prefix or name.startswith(prefix + ".")):
@@ -274,13 +307,19 @@ def functions_replaced(stage: Stage, impl: Any, wrappers: dict[str, Callable[[An
         for attr, value in list(vars(module).items()):
             for task, fn in own.items():
                 if fn is not None and value is fn:
-                    setattr(module, attr, wrappers[task](fn))
+                    if task not in made:   # one wrapper per task, so a block nested inside finds it everywhere
+                        made[task] = wrappers[task](fn)
+                    setattr(module, attr, made[task])
                     changed.append((module, attr, value))
+    tasks = _REPLACED.setdefault(impl.__name__, []) if record else []
+    tasks.extend(wrappers)
     try:
         yield
     finally:
-        for module, attr, value in changed:
+        for module, attr, value in reversed(changed):
             setattr(module, attr, value)
+        for task in wrappers:
+            tasks.remove(task)
 
 
 def part(package: str, name: str) -> ModuleType:

@@ -12,3 +12,9 @@ from .tracer import trace
 
 __all__ = ["camera_rays", "intersect_sphere", "intersect_triangle", "build_bvh", "closest_hit", "local_shading",
            "shadow_transmission", "reflect", "refract", "fresnel", "trace"]
+# BEGIN SOLUTION
+#: The one hook for speed: the kit runs this package's large batches of W1, W4, W5, W7 and W11 through the
+#: instructor's compiled kernels (cs451/stages/whitted/accel/, in no release or sandbox), which give the same
+#: images; everywhere else the code above runs as it reads.
+ACCELERATED = True
+# END SOLUTION

@@ -15,25 +15,6 @@ import numpy as np
 from cs451.tracescene import TraceScene
 
 LEAF_SIZE = 4   # split every node of more primitives than this; a leaf may hold at most 8 (handout §W4)
-# BEGIN SOLUTION
-#: Batches at least this large go to the compiled kernels (kernels.py); smaller ones, to plain numpy
-#: (wavefront.py), where compiling would cost more than it saves.
-COMPILED_RAYS = 10_000
-COMPILED_PRIMS = 5_000
-_compiled = [False]
-
-
-def use_compiled(n: int) -> bool:
-    """Large batches compile the kernels once; after that, every batch uses them."""
-    if n >= COMPILED_RAYS:
-        _compiled[0] = True
-    return _compiled[0]
-
-
-#: Whether ``trace`` runs compiled batches as whole frames (kernels.frame) rather than bounce by bounce in
-#: numpy over the compiled closest-hit and shadow kernels (the tests compare the two).
-FRAME_KERNEL = True
-# END SOLUTION
 
 
 def build_bvh(lo: np.ndarray, hi: np.ndarray) -> dict[str, np.ndarray]:
@@ -42,13 +23,10 @@ def build_bvh(lo: np.ndarray, hi: np.ndarray) -> dict[str, np.ndarray]:
     Split each node where the surface area heuristic is lowest, so that rays visit few nodes.
     """
     # BEGIN SOLUTION W4: top-down: bin centroids along each axis, split where the surface area heuristic is lowest (handout §W4)
+    from .wavefront import median_bvh
     lo = np.ascontiguousarray(lo, dtype=np.float64)
     hi = np.ascontiguousarray(hi, dtype=np.float64)
-    if len(lo) < COMPILED_PRIMS:   # small: a numpy median split, level by level (no compiling)
-        from .wavefront import median_bvh
-        return median_bvh(lo, hi, LEAF_SIZE)
-    from .hierarchy import built
-    return built(lo, hi, LEAF_SIZE)   # compiled, and cached by the boxes' digest (hierarchy.py)
+    return median_bvh(lo, hi, LEAF_SIZE)
     # END SOLUTION
 
 
@@ -64,24 +42,11 @@ def closest_hit(scene: TraceScene, origins: np.ndarray, directions: np.ndarray) 
     and ``scene.counters["tests"]``.
     """
     # BEGIN SOLUTION W5: traverse the hierarchy near child first, keep the nearest t (handout §W5)
+    from .wavefront import closest as closest_numpy
     o = np.ascontiguousarray(origins, dtype=np.float64)
     d = np.ascontiguousarray(directions, dtype=np.float64)
-    n = len(o)
-    if not use_compiled(n):
-        from .wavefront import closest as closest_numpy
-        t, prim, normals, nodes, tests = closest_numpy(scene, o, d)
-        scene.counters["nodes_visited"] += int(nodes)
-        scene.counters["tests"] += int(tests)
-        return t, prim, normals
-    from .hierarchy import closest_args
-    from .kernels import closest, scratch
-    from .running import in_threads
-    t = np.empty(n)
-    prim = np.empty(n, np.int64)
-    normals = np.empty((n, 3))
-    stats = np.empty((n, 2), np.int64)
-    in_threads(closest, n, (o, d), closest_args(scene), (t, prim, normals, stats), scratch())
-    scene.counters["nodes_visited"] += int(stats[:, 0].sum())
-    scene.counters["tests"] += int(stats[:, 1].sum())
+    t, prim, normals, nodes, tests = closest_numpy(scene, o, d)
+    scene.counters["nodes_visited"] += int(nodes)
+    scene.counters["tests"] += int(tests)
     return t, prim, normals
     # END SOLUTION

@@ -22,15 +22,6 @@ def camera_rays(camera, width: int, height: int) -> tuple[np.ndarray, np.ndarray
     true_up = np.cross(right, forward)
     tan_y = np.tan(np.radians(camera.fovy) / 2.0)
     tan_x = tan_y * width / height
-    from .bvh import use_compiled
-    if use_compiled(width * height):   # a large image: the same arithmetic, compiled (kernels.camera)
-        from .kernels import camera
-        from .running import compiled
-        origins, directions = np.empty((width * height, 3)), np.empty((width * height, 3))
-        args = (eye, forward, right, true_up, float(tan_x), float(tan_y), int(width), int(height), origins, directions)
-        compiled(camera, args)
-        camera(*args)
-        return origins, directions
     x = (2.0 * (np.arange(width) + 0.5) / width - 1.0) * tan_x
     y = (1.0 - 2.0 * (np.arange(height) + 0.5) / height) * tan_y
     across = forward + x[:, None] * right                  # (width, 3): each column's part, then each row's

@@ -1,8 +1,8 @@
-"""The reference's plain numpy paths: what a clear vectorised student solution looks like.
+"""The reference's hierarchy and traversals in plain numpy, every ray of a batch at once: what a clear
+vectorised student solution looks like.
 
-The reference uses these for small batches (the autograder's images, the unit tests), where
-compiling the numba kernels of ``kernels.py`` would cost more than it saves, and the kernels
-for large renders. Both give the same hits (``tests/test_whitted_robust.py`` checks).
+The kit's compiled kernels (instructor-side, ``cs451/stages/whitted/accel/``) take the reference's large
+batches through its one hook; both give the same hits (``tests/test_whitted_robust.py`` checks).
 """
 # BEGIN SOLUTION
 from __future__ import annotations

@@ -407,7 +407,7 @@ def run_demo(module: Any, output: Any, window: bool, frames: int | None, scene: 
 
 
 #: Camera rays at this size make batches large enough for an implementation's compiled path (the reference's
-#: kernels take batches of 10,000 rays and more: reference/whitted/bvh.py).
+#: speed layer takes batches of 10,000 rays and more: accel/__init__.py).
 WARM_SIZE = (160, 120)
 
 
@@ -441,5 +441,5 @@ STAGE = Stage(
     name="whitted", number=2, title="Whitted ray tracing", handout="02-whitted", tasks=TASKS, render=render,
     probes=PROBES, demo=run_demo, options_type=WhittedOptions, draws=(Sphere, Plane, Polygon, Mesh, PointLight, AreaLight),
     demo_keys=DEMO_KEYS,
-    estimate=estimate, warm=warm,
+    estimate=estimate, warm=warm, accelerator=f"{__name__}.accel",
 )

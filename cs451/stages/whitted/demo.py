@@ -24,9 +24,9 @@ secondary ray's parent is the hit its origin leaves from; it is a reflection whe
 on the side the parent ray came from, a refraction otherwise. The tree is drawn through a
 pinhole fitted to the submission's own camera rays (the kit writes no look-at of its own).
 
-The reference traces large images in one compiled kernel that calls neither W5 nor W7; while
-either is replaced (the shadow switch, the ray-tree recording) its W11 takes the per-bounce path
-that calls them, so the switches and the tree see what any W11 does.
+Through its speed hook the reference traces large images in one compiled kernel that calls neither W5
+nor W7; while either is replaced (the shadow switch, the ray-tree recording) the speed layer runs its
+W11 bounce by bounce, calling them, so the switches and the tree see what any W11 does.
 """
 from __future__ import annotations
 
@@ -48,7 +48,7 @@ from ...imageio import to_uint8
 from ...scene import Sphere, load_scene
 from .. import whitted as W
 from ..base import functions_replaced
-from .ray_tree import LEGEND, RAY_COLOURS, SHADOW_COLOURS, Pinhole, RayTree, TracedRay
+from .ray_tree import LEGEND, RAY_COLOURS, SHADOW_COLOURS, Pinhole, RayTree, build_tree
 
 #: The most rays one piece hands to W11 (its memory); below that, a piece is what the last one says fits in
 #: half a step.
@@ -286,34 +286,11 @@ class WhittedDemo:
         ts = self.scene_for(self.settings)
         with self._switched(self.settings, extra):
             W.STAGE.call(self.tracer, "W11", ts, self.origins[ray:ray + 1], self.directions[ray:ray + 1])
-        rays = self._rays(hits)
-        lights = [(o, target, float(np.max(through))) for call in shadows for o, target, through in zip(*call)]
+        traced = build_tree(hits, shadows, self.reach)
+        rays = [r for r in traced if r.kind != "shadow"]
+        lights = [(r.start, r.end, float(np.max(r.through))) for r in traced if r.kind == "shadow"]
         self._frame = None
         return RayTree((x, y), rays, lights, dict(ts.counters))
-
-    def _rays(self, calls: list[list[np.ndarray]]) -> list[TracedRay]:
-        rays: list[TracedRay] = []
-        points: list[np.ndarray] = []           # hit points so far, with their ray, normal and direction
-        owners: list[tuple[int, np.ndarray, np.ndarray]] = []
-        for number, (o, d, t, prim, normals) in enumerate(calls):
-            found = []
-            for j in range(len(o)):
-                parent, kind = None, "camera" if number == 0 else "ray"
-                if points:
-                    dist = np.linalg.norm(np.asarray(points) - o[j], axis=1)
-                    best = int(np.argmin(dist))
-                    if dist[best] <= 1e-3 * (1.0 + np.abs(o[j]).max()):
-                        parent = owners[best][0]
-                        n, incoming = owners[best][1], owners[best][2]
-                        kind = "reflection" if (d[j] @ n) * (incoming @ n) < 0 else "refraction"
-                hit = bool(np.isfinite(t[j]) and prim[j] >= 0)
-                end = o[j] + (t[j] if hit else self.reach) * d[j]
-                rays.append(TracedRay(kind, o[j], end, hit, parent))
-                if hit:
-                    found.append((end, (len(rays) - 1, normals[j], d[j])))
-            points += [p for p, _ in found]
-            owners += [owner for _, owner in found]
-        return rays
 
     def _draw_tree(self, image: np.ndarray, tree: RayTree) -> np.ndarray:
         from PIL import Image, ImageDraw

@@ -1,5 +1,5 @@
 """Every ray Whitted's recursion casts for a few pixels, recorded from the reference as the grader records it:
-the ray trees the deck draws.
+the ray trees the deck draws (built by ``ray_tree.build_tree``, as the demo's are).
 """
 from __future__ import annotations
 
@@ -9,7 +9,9 @@ import numpy as np
 
 from ...errors import KitError
 from ...scene import parse_scene
-from ...slides.canvas import numpy_path, reference_impl
+from ...slides.canvas import reference_impl
+from .accel import forced
+from .ray_tree import build_tree
 from .. import get_stage
 from ..base import functions_replaced
 
@@ -38,42 +40,23 @@ def ray_tree(data: dict[str, Any], pixels: list[tuple[int, int]], size: tuple[in
         def wrap(own: Any) -> Any:
             def recorded(*args: Any) -> Any:
                 out = own(*args)
-                calls[task].append((args[1:], out))
+                calls[task].append((*args[1:], *(out if task == "W5" else (out,))))
                 return out
             return recorded
         return wrap
 
-    with numpy_path(impl), functions_replaced(stage, impl, {task: recording(task) for task in calls}):
+    with forced("numpy"), functions_replaced(stage, impl, {task: recording(task) for task in calls}):
         stage.probes["render"](impl, data, [len(picked), 1], origins=origins[picked], directions=directions[picked],
                                **options)
     arrays = build(scene)
     rays: list[dict[str, Any]] = []
-    for depth, ((o, d), (t, prim, normals)) in enumerate(calls["W5"]):
-        for k in range(len(o)):
-            parent, kind = None, "camera"
-            if depth:
-                parent = nearest_hit(rays, o[k], depth - 1)
-                p = rays[parent]
-                facing = p["normal"] if p["direction"] @ p["normal"] < 0 else -p["normal"]
-                kind = "reflection" if d[k] @ facing > 0 else "refraction"
-            hit = bool(prim[k] >= 0)
-            end = o[k] + (t[k] if hit else MISS_LENGTH) * d[k]
-            material = arrays.material_names[int(arrays.material_at(prim[k:k + 1], end[None])[0])] if hit else None
-            rays.append({"kind": kind, "origin": o[k], "direction": d[k], "end": end, "hit": hit, "normal": normals[k],
-                         "parent": parent, "depth": depth, "material": material})
-    for (o, targets), through in calls["W7"]:
-        for k in range(len(o)):
-            parent = nearest_hit(rays, o[k])
-            rays.append({"kind": "shadow", "origin": o[k], "end": np.asarray(targets[k], dtype=np.float64),
-                         "hit": False, "parent": parent, "depth": rays[parent]["depth"] + 1, "material": None,
-                         "through": np.asarray(through[k], dtype=np.float64)})
+    for ray in build_tree(calls["W5"], calls["W7"], MISS_LENGTH):
+        if ray.kind == "ray" or (ray.kind == "shadow" and ray.parent is None):
+            raise KitError("ray tree: a spawned ray starts from no recorded hit")
+        material = None
+        if ray.hit:
+            material = arrays.material_names[int(arrays.material_at(np.array([ray.prim]), ray.end[None])[0])]
+        rays.append({"kind": ray.kind, "origin": ray.start, "direction": ray.direction, "end": ray.end,
+                     "hit": ray.hit, "normal": ray.normal, "parent": ray.parent, "depth": ray.depth,
+                     "material": material, **({"through": ray.through} if ray.kind == "shadow" else {})})
     return rays
-
-
-def nearest_hit(rays: list[dict[str, Any]], point: np.ndarray, depth: int | None = None) -> int:
-    """The ray (of ``depth``) whose hit a spawned ray starts from: the nearest hit point (spawn moves it by 1e-9)."""
-    found = [(float(np.linalg.norm(r["end"] - point)), i) for i, r in enumerate(rays)
-             if r["hit"] and r["kind"] != "shadow" and (depth is None or r["depth"] == depth)]
-    if not found:
-        raise KitError("ray tree: a spawned ray starts from no recorded hit")
-    return min(found)[1]

@@ -12,8 +12,9 @@ from ...progress import Progress
 from ...scene import parse_scene
 from .. import get_stage
 from ...slides.registry import Drawn, slide_figure
-from ...slides.canvas import (Panel, axes_plot, encoded, numpy_path, panel_grid, project, reference_impl, scene_data,
+from ...slides.canvas import (Panel, axes_plot, encoded, panel_grid, project, reference_impl, scene_data,
                               stacked, visible_segment)
+from .accel import forced
 from ..hemicube.figures import camera_matrix
 from .figure_rays import ray_tree
 
@@ -28,7 +29,7 @@ RAY_STYLE = {"camera": ("white", "-"), "reflection": ("#33d6ff", "-"), "refracti
 def _whitted(data: dict[str, Any], size: tuple[int, int], **options: Any) -> tuple[np.ndarray, dict[str, int]]:
     """A scene traced by the reference through stage 2's render probe: the image (uint8) and the tracer's counters."""
     stage, impl = get_stage("whitted"), reference_impl("whitted")
-    with numpy_path(impl):
+    with forced("numpy"):
         out = stage.probes["render"](impl, data, list(size), **options)
     counters = {k: int(v) for k, v in out.items() if k != "image"}
     return encoded(out["image"], parse_scene(data)), counters
@@ -366,7 +367,7 @@ def _bench_whitted(bar: Progress, top: list[int], spps: list[int], cutoffs: list
     bench, impl = bench_module("whitted"), reference_impl("whitted")
     scene = parse_scene(scene_data("whitted.json"), "whitted")
     largest = (top[0], top[1])
-    with numpy_path(impl):
+    with forced("numpy"):
         converged, _, converged_seconds = bench._render(impl, scene, largest, **bench.CONVERGED)
         bar.advance(note="converged")
         variants = [("size", f"{w}×{h}", (w, h), bench.DEFAULT) for w, h in

@@ -1,5 +1,7 @@
-"""One pixel's ray tree as the Whitted demo shows it: the rays the submission's W11 cast (recorded through its W5 and
-W7 queries), and the pinhole that places them in the picture, fitted to the submission's own camera rays.
+"""A ray tree, the one way the kit builds it: the rays a W11 cast for a few camera rays, recorded through its W5
+(closest hit) and W7 (shadow rays) queries, each joined to the hit it leaves from. The demo draws one pixel's
+tree over the picture, through a pinhole fitted to the submission's own camera rays; the deck's figures
+(``figure_rays.py``) draw the reference's.
 """
 from __future__ import annotations
 
@@ -18,11 +20,59 @@ LEGEND = "tree: cyan reflected | magenta refracted | shadow rays: green lit, ora
 
 @dataclass
 class TracedRay:
-    kind: str                      # camera, reflection, refraction, ray (no parent found)
+    kind: str                      # camera, reflection, refraction, shadow; "ray" where no parent was found
     start: np.ndarray
-    end: np.ndarray                # the hit, or a scene's length along a miss
+    direction: np.ndarray          # unit; a shadow ray's towards its light sample
+    end: np.ndarray                # the hit, the light sample, or ``reach`` along a miss
     hit: bool
-    parent: int | None
+    parent: int | None             # the ray whose hit this one leaves from
+    depth: int                     # the camera ray's is 0
+    prim: int = -1                 # the primitive hit (-1: none)
+    normal: np.ndarray | None = None
+    through: np.ndarray | None = None   # a shadow ray's: the RGB factor of the light that gets through
+
+
+#: A spawned ray starts within this of its parent's hit, relative to the point's size (spawn moves it by 1e-9).
+JOIN = 1e-3
+
+
+def build_tree(closest_calls: list[tuple], shadow_calls: list[tuple], reach: float) -> list[TracedRay]:
+    """The rays of W5 calls ``(origins, directions, t, prim, normals)`` and W7 calls ``(origins, targets, through)``,
+    in the order they were made. The first W5 call casts the camera rays; every later ray leaves from the nearest
+    earlier hit (whatever order a W11 casts in: bounce by bounce, or depth first), as a reflection when it leaves
+    on the side its parent came from and a refraction otherwise, one level deeper; a ray with no hit near its
+    origin is drawn as a "ray" of its own. Misses are drawn ``reach`` long."""
+    rays: list[TracedRay] = []
+    for call, (o, d, t, prim, normals) in enumerate(closest_calls):
+        hits = [i for i, r in enumerate(rays) if r.hit]
+        for k in range(len(o)):
+            parent = _parent(rays, hits, o[k]) if call else None
+            kind, depth = ("camera", 0) if call == 0 else ("ray", call)
+            if parent is not None:
+                p = rays[parent]
+                kind = "reflection" if (d[k] @ p.normal) * (p.direction @ p.normal) < 0 else "refraction"
+                depth = p.depth + 1
+            hit = bool(np.isfinite(t[k]) and prim[k] >= 0)
+            end = o[k] + (t[k] if hit else reach) * d[k]
+            rays.append(TracedRay(kind, o[k], d[k], end, hit, parent, depth, int(prim[k]) if hit else -1, normals[k]))
+    hits = [i for i, r in enumerate(rays) if r.hit]
+    for o, targets, through in shadow_calls:
+        for k in range(len(o)):
+            parent = _parent(rays, hits, o[k])
+            target = np.asarray(targets[k], dtype=np.float64)
+            seg = target - o[k]
+            rays.append(TracedRay("shadow", o[k], seg / max(float(np.linalg.norm(seg)), 1e-300), target, False, parent,
+                                  1 if parent is None else rays[parent].depth + 1,
+                                  through=np.asarray(through[k], dtype=np.float64)))
+    return rays
+
+
+def _parent(rays: list[TracedRay], candidates: list[int], origin: np.ndarray) -> int | None:
+    if not candidates:
+        return None
+    dist = [float(np.linalg.norm(rays[i].end - origin)) for i in candidates]
+    best = int(np.argmin(dist))
+    return candidates[best] if dist[best] <= JOIN * (1.0 + np.abs(origin).max()) else None
 
 
 @dataclass

@@ -1,7 +1,6 @@
 """Running the reference's compiled kernels: compiled once (numba's on-disk cache keeps them for later
 runs, and the first compile says so), then over chunks of rays in threads. A student's starter has no copy of it.
 """
-# BEGIN SOLUTION
 from __future__ import annotations
 
 import sys
@@ -110,4 +109,3 @@ def in_threads(kernel: Any, n: int, row_args: tuple, shared: tuple, outs: tuple,
 
     with ThreadPoolExecutor(threads) as pool:
         list(pool.map(run, range(len(bounds) - 1)))
-# END SOLUTION

@@ -3,7 +3,6 @@ compiled kernels traverse, both in numba, each kept in a small cache keyed by a 
 was made from (so renders and demo frames of the same geometry build nothing), with counts of what was
 built and what was reused. A student's starter has no copy of it.
 """
-# BEGIN SOLUTION
 from __future__ import annotations
 
 import math
@@ -13,7 +12,7 @@ from typing import Any, Callable
 import numpy as np
 from numba import njit
 
-from cs451.tracescene import TraceScene, content_key
+from ....tracescene import TraceScene, content_key
 
 from .running import compiled
 
@@ -336,4 +335,3 @@ def shadow_args(scene: TraceScene, tree: tuple | None = None) -> tuple:
     p = packed(scene)
     return (*(p["tree"] if tree is None else tree), p["nsph"], p["sph"], p["tri"], p["planes"], p["frame"],
             scene.plane_checker, scene.plane_checker_material, scene.prim_material, scene.mat_transmittance)
-# END SOLUTION

@@ -2,12 +2,11 @@
 per-bounce bookkeeping runs in numpy. ``tracer.trace`` hands large batches here; both give the same
 colours to rounding and the same counters (``tests/test_whitted_frame.py``). A student's starter has no copy of it.
 """
-# BEGIN SOLUTION
 from __future__ import annotations
 
 import numpy as np
 
-from cs451.tracescene import SPAWN_OFFSET, TraceScene
+from ....tracescene import SPAWN_OFFSET, TraceScene
 
 from . import kernels as K
 from .hierarchy import closest_args, packed
@@ -62,4 +61,3 @@ def trace_frame(scene: TraceScene, origins: np.ndarray, directions: np.ndarray,
     for k, name in enumerate(("shadow", "reflection", "transmission", "nodes_visited", "tests")):
         scene.counters[name] += int(total[k])
     return colour
-# END SOLUTION

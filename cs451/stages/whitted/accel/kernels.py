@@ -7,7 +7,6 @@ A clear numpy solution does not need this file: it is how the reference reaches 
 (see ``bench/whitted.py``). The frame kernel lives here with the traversal it inlines because numba's
 cache checks only the file a kernel is defined in. A student's starter has no copy of it.
 """
-# BEGIN SOLUTION
 from __future__ import annotations
 
 import math
@@ -874,4 +873,3 @@ def frame(O, D, nf, ni, order, ltri, use_bvh, nsph, sph, tri, planes, tri_normal
         out[i, 0], out[i, 1], out[i, 2] = c0, c1, c2
         counts[i, 0], counts[i, 1], counts[i, 2], counts[i, 3], counts[i, 4] = (n_shadow, n_reflect, n_transmit,
                                                                                  nodes, tests)
-# END SOLUTION
