@@ -29,11 +29,15 @@ def parse_size(text: str | None) -> tuple[int, int] | None:
 
 
 def infer_stage(scene) -> str:
-    """The stage a scene is meant for: the first stage named in its ``options``, else stage 1."""
-    for name in scene.options:
-        if name in stage_names():
-            return name
-    return stage_names()[0]
+    """The stage to draw a scene with when ``--stage`` is not given, asked of the stages: the one its ``options``
+    name among those that draw it; none named, the first that draws it; several named, the user chooses."""
+    drawing = [name for name in stage_names() if get_stage(name).draws_scene(scene)]
+    named = [name for name in drawing if name in scene.options]
+    if len(named) > 1:
+        raise KitError(f"{scene.label}: its options name stages {', '.join(named)}; choose one with --stage")
+    if named or drawing:
+        return (named or drawing)[0]
+    raise KitError(f"{scene.label}: no stage draws every object and light in it (stages: {', '.join(stage_names())})")
 
 
 def render_scene(*, scene: str, output: str | Path, impl: str = "reference", size: str | None = None,

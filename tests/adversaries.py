@@ -9,54 +9,14 @@ that ships an answer gives it points. Both must score 0.
 """
 from __future__ import annotations
 
+import importlib
 import shutil
 from pathlib import Path
 
 from cs451.stages import get_stage
 
-#: Each task's least answer of the right form, as the body of its function.
-VACUOUS = {
-    "perspective": "return np.eye(4)",
-    "look_at": "return np.eye(4)",
-    "sphere_mesh": "return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3), dtype=int)",
-    "gouraud_shaders": "return VS, FS",
-    "phong_shaders": "return VS, FS",
-    "reshape": "return (0, 0, 0, 0), np.eye(4)",
-    "handle_key": "return state",
-    "camera_rays": "n = width * height\n    return np.tile(np.asarray(camera.eye, float), (n, 1)), np.tile([0.0, 0.0, -1.0], (n, 1))",
-    "intersect_sphere": "n = len(origins)\n    return np.full(n, np.inf), np.full(n, np.inf)",
-    "intersect_triangle": "return np.full(len(origins), np.inf)",
-    "build_bvh": ("n = len(lo)\n    return {'lo': lo.min(axis=0)[None], 'hi': hi.max(axis=0)[None], 'child': np.array([-1]),"
-                  " 'start': np.array([0]), 'count': np.array([n]), 'order': np.arange(n)}"),
-    "closest_hit": "n = len(origins)\n    return np.full(n, np.inf), np.full(n, -1), np.zeros((n, 3))",
-    "local_shading": "return np.zeros((len(normals), 3))",
-    "shadow_transmission": "scene.counters['shadow'] += len(origins)\n    return np.ones((len(origins), 3))",
-    "reflect": "return np.asarray(directions, float)",
-    "refract": "d = np.asarray(directions, float)\n    return d, np.zeros(len(d), bool)",
-    "fresnel": "return np.zeros(np.shape(cos_i))",
-    "trace": "scene.counters['camera'] += len(origins)\n    return np.zeros((len(origins), 3))",
-    "delta_form_factors": "r = int(resolution)\n    return np.zeros((r, r)), np.zeros((r // 2, r))",
-    "hemicube_views": "return np.stack([np.eye(4)] * 5)",
-    "hemicube_projections": "return np.stack([np.eye(4)] * 2)",
-    "item_buffer_shaders": "return ITEM_VS, ITEM_FS",
-    "form_factor_row": "return np.zeros(n_patches)",
-    "point_polygon_form_factor": "return 0.0",
-    "model_view_matrices": "return np.zeros((sum(1 for c in calls if c[0] == 'draw'), 4, 4))",
-    "subdivide": "q = np.asarray(quads, float)\n    return q.copy(), np.arange(len(q))",
-    "shoot": "return np.array(radiosity, float), np.array(unshot, float)",
-    "progressive_refinement": "return np.array(emission, float), np.zeros_like(np.array(emission, float)), []",
-    "ambient_term": "return np.zeros(3)",
-    "vertex_colors": ("q = np.asarray(quads, float)\n    return q.reshape(-1, 3), np.repeat(np.asarray(radiosity, float), 4, axis=0),"
-                      " np.arange(4 * len(q)).reshape(-1, 4)"),
-}
-
 HEADER = '''"""A submission that does nothing: the least answer of the right form for every task."""
 import numpy as np
-
-VS = "void main() { gl_Position = u_projection * u_model_view * vec4(in_position, 1.0); }"
-FS = "void main() { frag_color = vec4(0.0, 0.0, 0.0, 1.0); }"
-ITEM_VS = "void main() { gl_Position = vec4(0.0, 0.0, 0.0, 1.0); }"
-ITEM_FS = "void main() { item = 0u; }"
 '''
 
 
@@ -66,7 +26,8 @@ def _define(task, body: str) -> str:
 
 def vacuous(stage: str, root: Path) -> Path:
     """A folder holding ``<stage>/__init__.py`` with every task answered by nothing."""
-    text = HEADER + "".join(_define(t, VACUOUS[t.function]) for t in get_stage(stage).tasks)
+    answers = importlib.import_module(f"cs451.stages.{stage}.adversary")   # each stage's own (adding-a-stage.md)
+    text = HEADER + answers.HEADER + "".join(_define(t, answers.NOTHING[t.id]) for t in get_stage(stage).tasks)
     (root / stage).mkdir(parents=True)
     (root / stage / "__init__.py").write_text(text)
     return root

@@ -113,6 +113,9 @@ Return `values` times `factor`.
 #: every file the recipe names for a stage called "toy" (the starter is derived by `cs451 starter`)
 RECIPE = {
     "cs451/stages/toy/__init__.py": TOY_STAGE,
+    "cs451/stages/toy/adversary.py": 'HEADER = ""\nNOTHING = {"T1": "return np.zeros(3)"}\n',
+    "cs451/stages/toy/tolerances.py": ('from ..base import Tolerance\n\nSCALED = Tolerance(1e-12, "a product of two '
+                                       'float64 numbers against the same product: rounding only")\n'),
     "reference/toy/__init__.py": "from .scale import scale\n",
     "reference/toy/scale.py": TOY_REFERENCE,
     "autograder/toy/__init__.py": "",
@@ -170,7 +173,7 @@ def test_the_toy_stage_passes_the_contract_and_the_handout_and_scene_tests(kit_w
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-2000:]
     summary = done.stdout.strip().splitlines()[-1]
     assert " passed" in summary and "failed" not in summary and "skipped" not in summary, summary
-    assert int(summary.split(" passed")[0].split()[-1]) >= 10, summary    # 4 contract, 6 handout, 2 scene kinds
+    assert int(summary.split(" passed")[0].split()[-1]) >= 11, summary    # 5 contract, 6 handout, 2 scene kinds
 
 
 def test_the_toy_stage_renders_and_grades_from_the_command_line(kit_with_toy_stage):
@@ -298,3 +301,22 @@ def test_no_module_is_longer_than_a_reader_can_hold():
             if lines > LONG_MODULES.get(rel, MODULE_LINES):
                 long[rel] = lines
     assert not long, f"modules over {MODULE_LINES} lines (split them by job): {long}"
+
+
+def test_a_stage_imports_another_only_where_it_builds_on_it():
+    """A stage's package names another stage's package only where its ``builds_on`` declares it (radiosity runs the
+    hemicube): the deck figures of one stage do not borrow another's."""
+    import ast
+    from cs451.stages import get_stage, stage_names
+    names = set(stage_names())
+    found = []
+    for stage in names:
+        allowed = set(get_stage(stage).builds_on) | {stage}
+        for path in (KIT_ROOT / "cs451" / "stages" / stage).rglob("*.py"):
+            for node in ast.walk(ast.parse(path.read_text())):
+                if isinstance(node, ast.ImportFrom):
+                    parts = ("." * node.level + (node.module or "")).split(".")
+                    other = {p for p in parts if p in names} - allowed
+                    if other:
+                        found.append(f"{path.relative_to(KIT_ROOT)}: {sorted(other)}")
+    assert not found, found

@@ -94,3 +94,19 @@ def test_demo_captions_never_draw_a_missing_glyph_box():
     fancy = captioned(frame, "16 shots — left: B, right: B + ρ·ambient, β ≤ 0.1")
     plain = captioned(frame, "16 shots - left: B, right: B + rho*ambient, beta <= 0.1")
     assert np.array_equal(fancy, plain)
+
+
+def test_render_asks_the_stages_which_one_draws_a_scene(tmp_path, capsys):
+    """Without --stage: the stage the scene's options name among those that draw it; none named, the first that draws
+    it; two named, one line asking for --stage (never a silent pick of the first)."""
+    import json
+    from cs451.render import infer_stage
+    from cs451.scene import BUNDLED_DIR, parse_scene
+    data = json.loads((BUNDLED_DIR / "cornell-box.json").read_text())
+    assert infer_stage(parse_scene(data)) == "radiosity"
+    assert infer_stage(parse_scene({**data, "options": {}})) == "whitted"      # stage 1 draws no polygon
+    both = tmp_path / "both.json"
+    both.write_text(json.dumps({**data, "options": {"whitted": {}, "radiosity": {}}}))
+    assert main(["render", str(both), "-o", str(tmp_path / "x.png")]) != 0
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "whitted, radiosity" in err and "--stage" in err, err

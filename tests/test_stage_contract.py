@@ -8,6 +8,7 @@
 from __future__ import annotations
 
 import ast
+import importlib
 import json
 from pathlib import Path
 
@@ -89,6 +90,17 @@ def test_a_task_stubbed_alone_loses_only_its_points(stage, task, make_submission
         else:
             named = any(f"{t} " in r.verdict.message for t in relies[r.test.number])   # "fix W5 closest_hit() first"
             assert named or r.score == full[r.test.number], (r.test.number, r.verdict.message)
+
+
+@pytest.mark.parametrize("stage", STAGES)
+def test_the_stage_names_a_least_answer_for_every_task(stage):
+    """The attack tests grade a submission made of these (tests/adversaries.py: it must score 0), so every task has
+    one, in the stage's own package, and each is the body of a function that compiles."""
+    answers = importlib.import_module(f"cs451.stages.{stage}.adversary")
+    assert set(answers.NOTHING) == {t.id for t in get_stage(stage).tasks}
+    compile(answers.HEADER, "HEADER", "exec")
+    for task in get_stage(stage).tasks:
+        compile(f"def {task.function}({', '.join(task.params)}):\n    {answers.NOTHING[task.id]}\n", task.id, "exec")
 
 
 @pytest.mark.parametrize("stage", STAGES)

@@ -8,13 +8,14 @@ from __future__ import annotations
 import numpy as np
 
 from cs451.grading.checks import output
+from cs451.stages.hemicube import tolerances as TOL
 
 
 def table_cells(out, expected, p, key: str):
     """The table ``key`` equals its closed form cell by cell, else the first bad cell."""
     want = np.asarray(expected[key], float)
     got = output(out, key, want.shape, f"the {key} table")
-    if not np.allclose(got, want, rtol=1e-9, atol=1e-15):
+    if not np.allclose(got, want, rtol=TOL.FLOAT64_RTOL, atol=TOL.CELL_ATOL):
         k = np.unravel_index(np.argmax(np.abs(got - want)), want.shape)
         return f"cell [row {k[0]}, column {k[1]}] is {got[k]:.6g}, expected {want[k]:.6g}"
 
@@ -24,7 +25,7 @@ def table_sum(out, expected, p):
     top = output(out, "top", (r, r), "the top table")
     side = output(out, "side", (r // 2, r), "the side table")
     total = float(np.sum(top) + 4 * np.sum(side))
-    bound = 0.6 / r ** 2 + 1e-9     # the midpoint rule's error: 0.0021 at r = 16 (truth: exact cells sum to 1)
+    bound = 0.6 / r ** 2 + TOL.MIDPOINT_SLACK     # the midpoint rule's error: 0.0021 at r = 16 (truth: exact cells sum to 1)
     if not abs(total - 1) <= bound:
         return f"top + 4 sides sum to {total:.6f}, expected 1 within {bound:.2g}"
 
@@ -42,11 +43,11 @@ def known_row(out, expected, p, entries: list, want: list, labels: list, rtol: f
 
 def row_closure(out, expected, p):
     sums = output(out, "rows", (len(p["rows"]), len(p["quads"])), "the rows").sum(axis=1)
-    bad = np.abs(sums - 1) > 0.005
-    return None if not bad.any() else f"row sums {sums.min():.4f} .. {sums.max():.4f}, expected 1 within 0.5%"
+    bad = np.abs(sums - 1) > TOL.CLOSURE
+    return None if not bad.any() else f"row sums {sums.min():.4f} .. {sums.max():.4f}, expected 1 within {TOL.CLOSURE:.1%}"
 
 
-def rows_like_reference(out, expected, p, atol: float = 2e-3):
+def rows_like_reference(out, expected, p, atol: float = TOL.ROW_ATOL):
     """The same rows as the reference's hemicubes (same views and rotations) give, entry by entry."""
     want = np.asarray(expected["rows"], float)
     got = output(out, "rows", want.shape, "the rows")

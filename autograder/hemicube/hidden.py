@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from cs451.stages.hemicube import tolerances as TOL
+
 from autograder.hemicube import truth as truths
 from autograder.hemicube.public import (CORNELL_QUADS, closure_test, contour_test, item_buffer_test, known_row_test,
                                         projections_test, row_sum_test, tables_test, views_test)
@@ -30,7 +32,7 @@ TESTS = [
     row_sum_test("H5 row: random item buffers, resolution 8, 300 patches (some never seen)", 2, 8, 300, 3),
     known_row_test("H5 row: a point under a wide, low disk (64-gon)", "H5", 2,
                    truths.small_patch_under_disk(0.01, 3.0, 0.7, 64), 0, [list(range(1, 65))],
-                   [truths.polygon_disk(3.0, 0.7, 64)], 0.002),
+                   [truths.polygon_disk(3.0, 0.7, 64)], TOL.KNOWN_ROW),
     closure_test("H5 row: a closed cube, 3 × 3 patches a face, rotated hemicubes", 2, 3, 48),
     contour_test("H6 point to polygon: a tilted triangle", 1, [0.1, 0.1, 0.0], [0, 0, 1], _tri),
     contour_test("H6 point to polygon: a triangle stored as a quad (repeated corner)", 1, [0.1, 0.1, 0.0], [0, 0, 1],
@@ -38,5 +40,5 @@ TESTS = [
     known_row_test("H6 proximity fix: a 1 × 0.5 floor and a 1 × 2 wall sharing an edge (Howell C-14)", "H6", 1,
                    [truths.square(0, 0, 0, 1, True)[:1] + [[0.5, 0, 0], [0.5, 1, 0], [0, 1, 0]],
                     [[0, 0, 0], [0, 1, 0], [0, 1, 2], [0, 0, 2]]],
-                   0, [[1]], [truths.howell_c14(1.0, 0.5, 2.0)], 0.003),
+                   0, [[1]], [truths.howell_c14(1.0, 0.5, 2.0)], TOL.SHARED_EDGE),
 ]

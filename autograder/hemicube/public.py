@@ -18,6 +18,7 @@ import numpy as np
 from cs451.compare import ImageTolerance
 from cs451.grading.checks import all_of, array_close, image_matches, sub
 from cs451.grading.spec import Test, truth, variant
+from cs451.stages.hemicube import tolerances as TOL
 from cs451.patches import scene_polygons
 from cs451.scene import BUNDLED_DIR, parse_scene
 
@@ -25,7 +26,9 @@ from autograder.hemicube import checks, truth as truths, variants
 
 #: The item buffer is exact integers; a few pixels on patch edges may differ between rasterisers.
 IMAGE = ImageTolerance()  # the kit's margin, measured in docs/tolerances.md
-MATRIX_TOL = "entries within 1e-9 relative, 1e-12 absolute"
+MATRIX_TOL = f"entries within {TOL.FLOAT64_RTOL} relative, {TOL.FLOAT64_ATOL} absolute"
+#: how the closed-form tests compare
+FLOAT64 = dict(rtol=TOL.FLOAT64_RTOL, atol=TOL.FLOAT64_ATOL)
 #: Time limits: generous for clear numpy code (the reference takes well under a second for each).
 QUICK, RENDER = 10.0, 60.0
 
@@ -37,19 +40,19 @@ def tables_test(name, points, resolution) -> Test:
     return Test(name, "H1", points, "tables", {"resolution": resolution},
                 all_of([("top face", sub(checks.table_cells, key="top")), ("side face", sub(checks.table_cells, key="side")),
                         ("sum", sub(checks.table_sum))], earn_with=["top face", "side face"]),
-                "each cell within 1e-9 relative of its formula; the cells sum to 1 within 0.6/r²", expected="none",
+                f"each cell within {TOL.FLOAT64_RTOL} relative of its formula; the cells sum to 1 within 0.6/r²", expected="none",
                 truth=truth(truths.tables), timeout=QUICK, vary=variant(variants.tables))
 
 
 def views_test(name, points, center, normal, up) -> Test:
     return Test(name, "H2", points, "views", {"center": center, "normal": normal, "up": up},
-                array_close("views", rtol=1e-9, atol=1e-12, what="the five view matrices", plural=True),
+                array_close("views", **FLOAT64, what="the five view matrices", plural=True),
                 MATRIX_TOL, expected="none", truth=truth(truths.views), timeout=QUICK, vary=variant(variants.views))
 
 
 def projections_test(name, points, near, far) -> Test:
     return Test(name, "H3", points, "projections", {"near": near, "far": far},
-                array_close("projections", rtol=1e-9, atol=1e-12, what="the two projections", plural=True),
+                array_close("projections", **FLOAT64, what="the two projections", plural=True),
                 MATRIX_TOL, expected="none", truth=truth(truths.projections), timeout=QUICK,
                 vary=variant(variants.projections))
 
@@ -74,8 +77,8 @@ def random_items(resolution: int, n: int, seed: int, unseen: int = 0) -> dict:
 
 def row_sum_test(name, points, resolution, n, seed, unseen=0) -> Test:
     return Test(name, "H5", points, "row_from_items", random_items(resolution, n, seed, unseen),
-                array_close("row", rtol=1e-9, atol=1e-12, what="the row"),
-                "each entry within 1e-9 relative of the sum of its cells' weights", expected="none",
+                array_close("row", **FLOAT64, what="the row"),
+                f"each entry within {TOL.FLOAT64_RTOL} relative of the sum of its cells' weights", expected="none",
                 truth=truth(truths.row_from_items), timeout=QUICK, vary=variant(variants.row_from_items, unseen=unseen > 0))
 
 
@@ -105,14 +108,14 @@ def closure_test(name, points, k, resolution) -> Test:
                 {"quads": quads, "rows": list(range(len(quads))), "resolution": resolution, "rotate": True},
                 all_of([("closure", sub(checks.row_closure)), ("the reference's rows", sub(checks.rows_like_reference))],
                        earn_with=["the reference's rows"]),
-                "every row sums to 1 within 0.5%, entries within 0.002 of the reference's hemicubes",
+                f"every row sums to 1 within {TOL.CLOSURE:.1%}, entries within {TOL.ROW_ATOL:g} of the reference's hemicubes",
                 given="hemicube_buffers", timeout=RENDER, vary=variant(variants.closure))
 
 
 def contour_test(name, points, point, normal, polygon) -> Test:
     return Test(name, "H6", points, "contour", {"point": point, "normal": normal, "polygon": polygon},
-                array_close("F", rtol=1e-9, atol=1e-12, what="F"),
-                "within 1e-9 relative of Lambert's formula", expected="none", truth=truth(truths.contour_value),
+                array_close("F", **FLOAT64, what="F"),
+                f"within {TOL.FLOAT64_RTOL} relative of Lambert's formula", expected="none", truth=truth(truths.contour_value),
                 timeout=QUICK, vary=variant(variants.contour))
 
 
@@ -145,16 +148,16 @@ TESTS = [
     row_sum_test("H5 row: random item buffers, resolution 4, 60 patches (the last 10 never seen)", 2, 4, 60, 4,
                  unseen=10),
     known_row_test("H5 row: 0.2 squares one apart, rotated hemicube (Howell C-11)", "H5", 4,
-                   truths.opposed_squares(0.2, 1.0), 0, [[1]], [truths.howell_c11(0.2, 0.2, 1.0)], 0.03, rotate=True),
+                   truths.opposed_squares(0.2, 1.0), 0, [[1]], [truths.howell_c11(0.2, 0.2, 1.0)], TOL.SMALL_SQUARES, rotate=True),
     known_row_test("H5 row: a point under a coaxial disk (256-gon)", "H5", 4,
                    truths.small_patch_under_disk(0.01, 1.0, 1.0, 256), 0, [list(range(1, 257))],
-                   [truths.polygon_disk(1.0, 1.0, 256)], 0.002),
+                   [truths.polygon_disk(1.0, 1.0, 256)], TOL.KNOWN_ROW),
     closure_test("H5 row: a closed cube, 2 × 2 patches a face, rows sum to 1", 3, 2, 64),
     contour_test("H6 point to polygon: a unit square one above a point", 4, [0.5, 0.5, 0], [0, 0, 1], UNIT_SQUARE_ABOVE),
     contour_test("H6 point to polygon: a triangle stored as a quad (repeated corner)", 2, [0.0, 0.1, 0.0], [0, 0, 1],
                  TRIANGLE_AS_QUAD),
     known_row_test("H6 proximity fix: unit squares one apart (Howell C-11, F = 0.19982)", "H6", 3,
-                   truths.opposed_squares(1.0, 1.0), 0, [[1]], [truths.howell_c11(1, 1, 1)], 0.002),
+                   truths.opposed_squares(1.0, 1.0), 0, [[1]], [truths.howell_c11(1, 1, 1)], TOL.KNOWN_ROW),
     known_row_test("H6 proximity fix: unit squares at right angles (Howell C-14, F = 0.20004)", "H6", 3,
-                   truths.perpendicular_squares(1.0, 1.0), 0, [[1]], [truths.howell_c14(1, 1, 1)], 0.002),
+                   truths.perpendicular_squares(1.0, 1.0), 0, [[1]], [truths.howell_c14(1, 1, 1)], TOL.KNOWN_ROW),
 ]

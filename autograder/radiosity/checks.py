@@ -11,6 +11,7 @@ import numpy as np
 
 from cs451.grading.checks import output
 from cs451.grading.spec import Verdict
+from cs451.stages.radiosity import tolerances as TOL
 from cs451.patches import patch_areas, patch_normals
 
 
@@ -30,7 +31,7 @@ def subdivide_exact(out, expected, p):
     if not np.array_equal(parent, parent_want):
         return "parent is not the index of each patch's quad, in order"
     err = np.abs(patches - want).max() / max(np.abs(want).max(), 1.0)
-    return None if err <= 1e-9 else f"corners differ from the bilinear grid by {err:.2e} (relative)"
+    return None if err <= TOL.FLOAT64_RTOL else f"corners differ from the bilinear grid by {err:.2e} (relative)"
 
 
 def subdivide_area(out, expected, p):
@@ -40,7 +41,7 @@ def subdivide_area(out, expected, p):
     got = np.bincount(parent, weights=patch_areas(patches), minlength=len(p["quads"]))
     want = patch_areas(np.asarray(p["quads"]))
     err = np.abs(got / want - 1).max()
-    return None if err <= 1e-5 else f"the patches of a quad cover {err:.2%} more or less than the quad"
+    return None if err <= TOL.AREA else f"the patches of a quad cover {err:.2%} more or less than the quad"
 
 
 def subdivide_edges(out, expected, p):
@@ -48,7 +49,7 @@ def subdivide_edges(out, expected, p):
     longest = np.linalg.norm(q - np.roll(q, -1, axis=1), axis=2).max() if len(q) else 0.0
     if not len(q):
         return "no patches"
-    return None if p["max_edge"] <= 0 or longest <= p["max_edge"] * (1 + 1e-9) else \
+    return None if p["max_edge"] <= 0 or longest <= p["max_edge"] * (1 + TOL.EDGE_SLACK) else \
         f"an edge is {longest:.4g} long, longer than max_edge {p['max_edge']}"
 
 
@@ -63,8 +64,8 @@ def subdivide_facing(out, expected, p):
 def shot_matches(out, expected, p) -> Verdict:
     n = len(p["areas"])
     B, dB = output(out, "radiosity", (n, 3), "radiosity"), output(out, "unshot", (n, 3), "unshot")
-    ok_b = np.allclose(B, expected["radiosity"], rtol=1e-9, atol=1e-12)
-    ok_d = np.allclose(dB, expected["unshot"], rtol=1e-9, atol=1e-12)
+    ok_b = np.allclose(B, expected["radiosity"], rtol=TOL.FLOAT64_RTOL, atol=TOL.FLOAT64_ATOL)
+    ok_d = np.allclose(dB, expected["unshot"], rtol=TOL.FLOAT64_RTOL, atol=TOL.FLOAT64_ATOL)
     if ok_b and ok_d:
         return Verdict(1.0, "B and ΔB match the hand-worked shot")
     what = [name for name, ok in (("radiosity", ok_b), ("unshot", ok_d)) if not ok]
@@ -82,13 +83,13 @@ def loop_matches(out, expected, p) -> Verdict:
         return Verdict(0.0, f"shot order differs from shot {first + 1} on: {got[:first + 3]}… expected "
                        f"{order[:first + 3]}… ({len(got)} shots, expected {len(order)})")
     B, dB = output(out, "radiosity", (n, 3), "radiosity"), output(out, "unshot", (n, 3), "unshot")
-    if not (np.allclose(B, expected["radiosity"], rtol=1e-8, atol=1e-12)
-            and np.allclose(dB, expected["unshot"], rtol=1e-8, atol=1e-12)):
+    if not (np.allclose(B, expected["radiosity"], rtol=TOL.LOOP_RTOL, atol=TOL.FLOAT64_ATOL)
+            and np.allclose(dB, expected["unshot"], rtol=TOL.LOOP_RTOL, atol=TOL.FLOAT64_ATOL)):
         return Verdict(0.5, "the order of shots is right but B or ΔB are not")
     return Verdict(1.0, f"{len(order)} shots in the right order with the right B and ΔB")
 
 
-def _shots_like_reference(out, expected, low: float = 0.8, high: float = 1.25) -> str | None:
+def _shots_like_reference(out, expected, low: float = 1 / (1 + TOL.SHOTS), high: float = 1 + TOL.SHOTS) -> str | None:
     """A progressive refinement shoots about as often as the reference's does on the same system."""
     got = len(output(out, "order", (None,), "order"))
     want = len(np.asarray(expected["order"]).ravel())
@@ -135,7 +136,7 @@ def converged_to_direct(out, expected, p, within: float) -> Verdict:
 def ambient_matches(out, expected, p) -> Verdict:
     want = np.asarray(expected["value"], float)
     got = output(out, "ambient", want.shape, "ambient")
-    if np.allclose(got, want, rtol=1e-9, atol=1e-12):
+    if np.allclose(got, want, rtol=TOL.FLOAT64_RTOL, atol=TOL.FLOAT64_ATOL):
         return Verdict(1.0, "ambient matches")
     return Verdict(0.0, f"ambient is {np.round(got, 6).tolist()}, expected {np.round(want, 6).tolist()} "
                    "(R · ΣΔB A / ΣA, R = 1/(1 − ρ_avg))")
@@ -153,12 +154,12 @@ def _vertices(out, p):
 
 def vertex_corners(out, expected, p):
     positions, corners, _ = _vertices(out, p)
-    return None if np.allclose(positions[corners], p["quads"], atol=1e-9) else "positions[corners] are not the patches' corners"
+    return None if np.allclose(positions[corners], p["quads"], atol=TOL.CORNER_ATOL) else "positions[corners] are not the patches' corners"
 
 
 def vertex_colours(out, expected, p):
     positions, corners, colors = _vertices(out, p)
-    if np.allclose(colors[corners], expected["corner_colors"], rtol=1e-9, atol=1e-12):
+    if np.allclose(colors[corners], expected["corner_colors"], rtol=TOL.FLOAT64_RTOL, atol=TOL.FLOAT64_ATOL):
         return None
     return "a vertex's colour is not the average of the patches of its polygon that meet there"
 

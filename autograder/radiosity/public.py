@@ -22,6 +22,7 @@ import numpy as np
 from cs451.compare import ImageTolerance
 from cs451.grading.checks import all_of, image_matches, sub
 from cs451.grading.spec import Test, check, truth, variant
+from cs451.stages.radiosity import tolerances as TOL
 from cs451.patches import patch_areas, patch_normals
 from cs451.scene import BUNDLED_DIR, load_scene
 from cs451.patching import radiosity_surfaces
@@ -98,41 +99,41 @@ SUBDIVIDE_CHECKS = all_of([("the grid of the handout", sub(checks.subdivide_exac
 
 def subdivide_test(name, points, quads, max_edge) -> Test:
     return Test(name, "R1", points, "subdivide", {"quads": quads, "max_edge": max_edge}, SUBDIVIDE_CHECKS,
-                "corners within 1e-9 (relative) of the bilinear grid; areas within 1e-5", expected="none",
+                f"corners within {TOL.FLOAT64_RTOL} (relative) of the bilinear grid; areas within {TOL.AREA}", expected="none",
                 truth=truth(truths.subdivision), edge_case=max_edge <= 0, timeout=QUICK, vary=variant(variants.subdivide))
 
 
 def shoot_test(name, points, system, i, radiosity=None, unshot=None) -> Test:
     params = {"i": i, **{k: system[k] for k in ("F", "areas", "reflectance")},
               "radiosity": radiosity or system["emission"], "unshot": unshot or system["emission"]}
-    return Test(name, "R2", points, "shoot", params, check(checks.shot_matches), "1e-9 relative", expected="none",
+    return Test(name, "R2", points, "shoot", params, check(checks.shot_matches), f"{TOL.FLOAT64_RTOL} relative", expected="none",
                 truth=truth(truths.shot), timeout=QUICK, vary=variant(variants.shoot))
 
 
 def by_hand_test(name, points, system, max_shots, tolerance=0.0, overshoot=1.0) -> Test:
     params = {**system, "tolerance": tolerance, "max_shots": max_shots, "overshoot": overshoot}
     return Test(name, "R3", points, "progressive", params, check(checks.loop_matches),
-                "same shots in the same order; B, ΔB within 1e-8", expected="none", truth=truth(truths.shooting_loop),
+                f"same shots in the same order; B, ΔB within {TOL.LOOP_RTOL}", expected="none", truth=truth(truths.shooting_loop),
                 timeout=SOLVE, depends_on=("R2",), vary=variant(variants.progressive))
 
 
 def furnace_test(name, points, albedo, tolerance, overshoot=1.0) -> Test:
     params = {**furnace_cube(albedo), "tolerance": tolerance, "max_shots": 100_000, "overshoot": overshoot}
     return Test(name, "R3", points, "progressive", params, check(checks.furnace_uniform, want=truths.furnace(1.0, albedo)),
-                "E/(1 − ρ) within twice the tolerance, in as many shots as the reference (± 25%)", timeout=SOLVE,
+                f"E/(1 − ρ) within twice the tolerance, in as many shots as the reference (± {TOL.SHOTS:.0%})", timeout=SOLVE,
                 depends_on=("R2",), vary=variant(variants.furnace))
 
 
-def scene_solve_test(name, points, scene, patch_size, tolerance=1e-5, within=1e-3) -> Test:
+def scene_solve_test(name, points, scene, patch_size, tolerance=1e-5, within=TOL.DIRECT_SOLVE) -> Test:
     params = {"scene": scene, "patch_size": patch_size, "resolution": 32, "tolerance": tolerance, "max_shots": 200_000}
     return Test(name, "R3", points, "progressive", params, check(checks.converged_to_direct, within=within),
-                f"within {within:.1%} of the direct solve (sum of |differences|), in as many shots as the reference (± 25%)",
+                f"within {within:.1%} of the direct solve (sum of |differences|), in as many shots as the reference (± {TOL.SHOTS:.0%})",
                 given="system", timeout=SOLVE, depends_on=("R2",), vary=variant(variants.box_scene))
 
 
 def ambient_test(name, points, areas, reflectance, unshot) -> Test:
     return Test(name, "R4", points, "ambient", {"areas": areas, "reflectance": reflectance, "unshot": unshot},
-                check(checks.ambient_matches), "1e-9 relative", expected="none", truth=truth(truths.ambient),
+                check(checks.ambient_matches), f"{TOL.FLOAT64_RTOL} relative", expected="none", truth=truth(truths.ambient),
                 timeout=QUICK, vary=variant(variants.ambient))
 
 
@@ -143,7 +144,7 @@ VERTEX_CHECKS = all_of([("corners", sub(checks.vertex_corners)), ("colours", sub
 def vertex_test(name, points, quads, parent, radiosity, kind="triangle") -> Test:
     """``kind``: "grid" (walls of the furnace) or "triangle" (a triangle beside a quad), for the fresh case."""
     return Test(name, "R5", points, "vertex_colors", {"quads": quads, "parent": parent, "radiosity": radiosity},
-                VERTEX_CHECKS, "colours within 1e-9", expected="none", truth=truth(truths.vertex_colours), timeout=QUICK,
+                VERTEX_CHECKS, f"colours within {TOL.FLOAT64_RTOL}", expected="none", truth=truth(truths.vertex_colours), timeout=QUICK,
                 vary=variant(variants.vertex_colors, kind=kind))
 
 

@@ -9,6 +9,7 @@ import numpy as np
 import trimesh
 
 from cs451.grading.checks import output
+from cs451.stages.sphere import tolerances as TOL
 
 
 def _match(a: np.ndarray, b: np.ndarray, tol: float) -> int:
@@ -37,9 +38,9 @@ def mesh_counts(out, expected, p):
 def mesh_normals(out, expected, p):
     _, _, pos, nrm, _ = _mesh(out, expected)
     length = np.linalg.norm(nrm, axis=1)
-    if not np.allclose(length, 1.0, atol=1e-5):
+    if not np.allclose(length, 1.0, atol=TOL.UNIT):
         return f"normals must have unit length (found lengths from {length.min():.4g} to {length.max():.4g})"
-    if not np.allclose(nrm, pos / p["radius"], atol=1e-5):
+    if not np.allclose(nrm, pos / p["radius"], atol=TOL.UNIT):
         return "normals must point straight out of the sphere (position / radius)"
 
 
@@ -48,7 +49,7 @@ def mesh_vertices(out, expected, p):
     if len(pos) > 4 * n:
         return f"{len(pos)} vertices, far more than glutSolidSphere's {n}"
     want = np.asarray(expected["vertices"], float)
-    tol = 1e-6 * p["radius"]
+    tol = TOL.POSITION * p["radius"]
     missing, extra = _match(want, pos, tol), _match(pos, want, tol)
     if missing or extra:
         return (f"{missing} of glutSolidSphere's vertices are missing and {extra} vertices are not on its "
@@ -74,7 +75,7 @@ def mesh_no_degenerate(out, expected, p):
         return "triangles must index the vertices (0 .. n-1)"
     t = tri.astype(np.int64)
     area = 0.5 * np.linalg.norm(np.cross(pos[t[:, 1]] - pos[t[:, 0]], pos[t[:, 2]] - pos[t[:, 0]]), axis=1)
-    tiny = int((area <= 1e-12 * p["radius"] ** 2).sum())
+    tiny = int((area <= TOL.DEGENERATE * p["radius"] ** 2).sum())
     if tiny:
         return f"{tiny} triangles have zero area"
 
@@ -102,14 +103,14 @@ def reshape_aspect(out, expected, p):
     proj = _projection(out)
     want = float(expected["aspect"])
     got = proj[1, 1] / proj[0, 0] if proj[0, 0] else np.inf
-    if not np.isclose(got, want, rtol=1e-6):
+    if not np.isclose(got, want, rtol=TOL.PROJECTION):
         return f"the projection's aspect ratio (P[1,1]/P[0,0]) is {got:.6g}, expected width/height = {want:.6g}"
 
 
 def reshape_fovy(out, expected, p):
     proj = _projection(out)
     want = float(expected["p11"])
-    if not np.isclose(proj[1, 1], want, rtol=1e-6):
+    if not np.isclose(proj[1, 1], want, rtol=TOL.PROJECTION):
         return f"P[1,1] is {proj[1, 1]:.6g}: the vertical field of view must stay {p['camera']['fovy']}° whatever the width"
 
 

@@ -17,12 +17,15 @@ from cs451.grading.spec import Test, truth, variant
 
 from cs451.scene import BUNDLED_DIR, load_scene
 from cs451.stages.sphere import drawing_calls
+from cs451.stages.sphere import tolerances as TOL
 
 from autograder.sphere import checks, truth as truths, variants
 
 #: Tolerance of the image tests: the measured margin is in docs/tolerances.md.
 IMAGE = ImageTolerance()  # the kit's margin, measured in docs/tolerances.md
-MATRIX_TOL = "entries within 1e-6 relative, 1e-9 absolute"
+MATRIX_TOL = f"entries within {TOL.MATRIX_RTOL} relative, {TOL.MATRIX_ATOL} absolute"
+#: the matrix tests' comparison
+MATRIX = dict(rtol=TOL.MATRIX_RTOL, atol=TOL.MATRIX_ATOL)
 #: Time limits per test: generous for clear numpy code (the reference takes under 0.2 s for each).
 QUICK, RENDER = 10.0, 30.0
 
@@ -37,13 +40,13 @@ def scene_variant(**changes) -> dict:
 
 
 def perspective_test(name, points, **params) -> Test:
-    return Test(name, "S1", points, "perspective", params, array_close("matrix", what="the matrix"),
+    return Test(name, "S1", points, "perspective", params, array_close("matrix", what="the matrix", **MATRIX),
                 MATRIX_TOL, expected="none", truth=truth(truths.perspective), timeout=QUICK,
                 vary=variant(variants.perspective))
 
 
 def look_at_test(name, points, **params) -> Test:
-    return Test(name, "S2", points, "look_at", params, array_close("matrix", what="the matrix"),
+    return Test(name, "S2", points, "look_at", params, array_close("matrix", what="the matrix", **MATRIX),
                 MATRIX_TOL, expected="none", truth=truth(truths.look_at), timeout=QUICK,
                 vary=variant(variants.look_at))
 
@@ -62,7 +65,7 @@ HANDOUT_VIEW = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, -8.0
 
 def model_view_test(name, points, calls, view=HANDOUT_VIEW) -> Test:
     return Test(name, "S3", points, "model_view_matrices", {"view": view, "calls": calls},
-                array_close("matrices", what="the matrices at the draws", plural=True), MATRIX_TOL, expected="none",
+                array_close("matrices", what="the matrices at the draws", plural=True, **MATRIX), MATRIX_TOL, expected="none",
                 truth=truth(truths.model_view_matrices), timeout=QUICK, vary=variant(variants.model_view_matrices))
 
 
@@ -73,7 +76,7 @@ def scene_calls(name: str) -> list:
 
 def mesh_test(name, points, **params) -> Test:
     return Test(name, "S4", points, "sphere_mesh", params, MESH_CHECKS,
-                "positions within 1e-6·radius of freeglut's; normals unit within 1e-5", expected="none",
+                f"positions within {TOL.POSITION}·radius of freeglut's; normals unit within {TOL.UNIT}", expected="none",
                 truth=truth(truths.sphere_mesh), timeout=QUICK, vary=variant(variants.sphere_mesh))
 
 
@@ -92,7 +95,7 @@ RESHAPE_CHECKS = all_of([("viewport covers the window", sub(checks.reshape_viewp
 def reshape_test(name, points, **params) -> Test:
     params.setdefault("camera", SPHERE_SCENE["camera"])
     return Test(name, "S7", points, "reshape", params, RESHAPE_CHECKS,
-                "viewport exact; aspect and field of view within 1e-6 relative", expected="none",
+                f"viewport exact; aspect and field of view within {TOL.PROJECTION} relative", expected="none",
                 given="reshape_parts", truth=truth(truths.reshape), timeout=QUICK, vary=variant(variants.reshape))
 
 

@@ -11,6 +11,7 @@ import numpy as np
 from cs451 import tracescene
 from cs451.grading.checks import output
 from cs451.grading.spec import Verdict
+from cs451.stages.whitted import tolerances as TOL
 
 
 def ray_count(p: dict) -> int:
@@ -28,14 +29,14 @@ def camera_origins(out, expected, p):
     n = p["width"] * p["height"]
     origins = output(out, "origins", (n, 3), "origins")
     eye = np.asarray(expected["eye"], float)
-    if not np.allclose(origins, eye, rtol=1e-9, atol=1e-9 * (1 + np.abs(eye).max())):
+    if not np.allclose(origins, eye, rtol=TOL.FLOAT64, atol=TOL.FLOAT64 * (1 + np.abs(eye).max())):
         return "every ray must start at the eye"
 
 
 def camera_unit(out, expected, p):
     d = output(out, "directions", (p["width"] * p["height"], 3), "directions")
     length = np.linalg.norm(d, axis=1)
-    if not np.allclose(length, 1.0, atol=1e-9):
+    if not np.allclose(length, 1.0, atol=TOL.FLOAT64):
         return f"directions must be unit vectors (lengths from {length.min():.6g} to {length.max():.6g})"
 
 
@@ -49,7 +50,7 @@ def camera_pixels(out, expected, p):
     ndc = x[:, :2] / x[:, 3:4]
     want = np.asarray(expected["ndc"], float)
     err = np.abs(ndc - want).max(axis=1)
-    if err.max() > 1e-6:
+    if err.max() > TOL.NDC:
         k = int(np.argmax(err))
         return (f"ray {k} (column {k % w}, row {k // w}) goes through NDC {ndc[k].round(5).tolist()}, "
                 f"expected the pixel centre {want[k].round(5).tolist()} (rows from the top)")
@@ -57,7 +58,7 @@ def camera_pixels(out, expected, p):
 
 # --- W2, W3 --------------------------------------------------------------------------------------
 
-def sphere_roots(out, expected, p, rel: float = 1e-9):
+def sphere_roots(out, expected, p, rel: float = TOL.FLOAT64):
     n = ray_count(p)
     got0, got1 = output(out, "t0", (n,), "t0"), output(out, "t1", (n,), "t1")
     want0, want1 = np.asarray(expected["t0"], float), np.asarray(expected["t1"], float)
@@ -74,7 +75,7 @@ def sphere_roots(out, expected, p, rel: float = 1e-9):
     return _few(bad)
 
 
-def triangle_hits(out, expected, p, rel: float = 1e-9):
+def triangle_hits(out, expected, p, rel: float = TOL.FLOAT64):
     """Every ray not exactly on an edge has the exact t (inf on a miss)."""
     n = ray_count(p)
     got = output(out, "t", (n,), "t")
@@ -95,13 +96,13 @@ def no_gaps(out, expected, p, rays: int, triangles: int):
     t = output(out, "t", (rays * triangles,), "t").reshape(rays, triangles)
     want = np.asarray(expected["t"], float).reshape(rays, triangles)
     edge = np.asarray(expected["edge"], bool).reshape(rays, triangles)
-    at_target = np.isfinite(t) & (np.abs(t - 1.0) <= 1e-9)
+    at_target = np.isfinite(t) & (np.abs(t - 1.0) <= TOL.FLOAT64)
     leaks = int((~at_target.any(axis=1)).sum())
     if leaks:
         return f"{leaks} of {rays} rays through shared edges or vertices hit none of the triangles (a gap) at t = 1"
     checkable = np.isfinite(t) & np.isfinite(want) & ~edge
     diff = np.abs(np.where(checkable, t, 0.0) - np.where(checkable, want, 0.0))
-    wrong = checkable & (diff > 1e-9 * np.maximum(1.0, np.abs(np.where(checkable, want, 1.0))))
+    wrong = checkable & (diff > TOL.FLOAT64 * np.maximum(1.0, np.abs(np.where(checkable, want, 1.0))))
     if wrong.any():
         i, j = np.argwhere(wrong)[0]
         return f"ray {int(i)} hits triangle {int(j)} at t = {t[i, j]:.12g}, but exactly it is at {want[i, j]:.12g}"
@@ -157,7 +158,7 @@ def bvh_tight(out, expected, p):
 
 # --- W5 ------------------------------------------------------------------------------------------
 
-def depth_visibility(out, expected, p, rel: float = 5e-3, max_bad: float = 0.02):
+def depth_visibility(out, expected, p, rel: float = TOL.DEPTH, max_bad: float = TOL.DEPTH_BAD):
     w, h = p["size"]
     t = output(out, "t", (w * h,), "t")
     hit = np.isfinite(t)
@@ -179,11 +180,11 @@ def depth_normals(out, expected, p):
     n = output(out, "normals", (w * h, 3), "normals")
     hit = np.isfinite(output(out, "t", (w * h,), "t"))
     length = np.linalg.norm(n[hit], axis=1)
-    if hit.any() and not np.allclose(length, 1.0, atol=1e-6):
+    if hit.any() and not np.allclose(length, 1.0, atol=TOL.HITS):
         return "normals at hits must be unit vectors"
 
 
-def hits_match(out, expected, params, min_same: float = 0.99, rel: float = 1e-6) -> Verdict:
+def hits_match(out, expected, params, min_same: float = TOL.SAME_PRIMITIVE, rel: float = TOL.HITS) -> Verdict:
     """The same primitive as the reference's on ≥ min_same of the rays, with t and normal close where it is."""
     want = np.asarray(expected["prim"])
     n = len(want)
@@ -194,7 +195,7 @@ def hits_match(out, expected, params, min_same: float = 0.99, rel: float = 1e-6)
     wt = np.asarray(expected["t"], float)
     hit = same & (want >= 0)
     t_bad = int((np.abs(t[hit] - wt[hit]) > rel * np.maximum(np.abs(wt[hit]), 1.0)).sum())
-    n_bad = int((np.abs(normals[hit] - np.asarray(expected["normals"])[hit]).max(axis=1) > 1e-6).sum()) if hit.any() else 0
+    n_bad = int((np.abs(normals[hit] - np.asarray(expected["normals"])[hit]).max(axis=1) > TOL.HITS).sum()) if hit.any() else 0
     if frac < min_same:
         k = int(np.argmax(~same))
         return Verdict(0.0, f"{1 - frac:.1%} of rays hit another primitive than the reference's "
@@ -211,7 +212,7 @@ def shadow_values(out, expected, p):
     got = output(out, "transmission", (n, 3), "the transmission")
     want = np.asarray(expected["value"], float)
     err = np.abs(got - want).max(axis=1)
-    if not np.isfinite(err).all() or err.max() > 1e-9:
+    if not np.isfinite(err).all() or err.max() > TOL.FLOAT64:
         i = int(np.argmax(np.where(np.isfinite(err), err, np.inf)))
         return f"segment {i}: {got[i].round(6).tolist()}, expected {want[i].round(6).tolist()}"
 
@@ -230,7 +231,7 @@ def refract_mask(out, expected, p):
         return f"ray {i}: total internal reflection is {bool(got[i])}, expected {bool(tir[i])}"
 
 
-def refract_directions(out, expected, p, atol: float = 1e-9):
+def refract_directions(out, expected, p, atol: float = TOL.FLOAT64):
     want, tir = np.asarray(expected["t"], float), np.asarray(expected["tir"], bool)
     got = output(out, "t", want.shape, "the refracted directions")
     err = np.abs(got - want).max(axis=1)

@@ -16,6 +16,7 @@ import numpy as np
 from cs451.compare import ImageTolerance
 from cs451.grading.checks import all_of, array_close, image_matches, image_part_of, sub
 from cs451.grading.spec import Test, check, truth, variant
+from cs451.stages.whitted import tolerances as TOL
 from cs451.scene import BUNDLED_DIR
 
 from autograder.whitted import checks, truth as truths, variants
@@ -80,14 +81,14 @@ def camera_test(name, points, **params) -> Test:
              ("through pixel centres (pyrender's camera)", sub(checks.camera_pixels))]
     return Test(name, "W1", points, "camera_rays", params,
                 all_of(parts, earn_with=["through pixel centres (pyrender's camera)"]),
-                "origins exact to 1e-9; unit directions; through pixel centres within 1e-6 in NDC",
+                f"origins exact to {TOL.FLOAT64}; unit directions; through pixel centres within {TOL.NDC} in NDC",
                 expected="none", truth=truth(truths.camera), timeout=QUICK, vary=variant(variants.camera))
 
 
 def sphere_test(name, points, **params) -> Test:
     return Test(name, "W2", points, "intersect_sphere", params,
                 all_of([("both roots, smaller first, inf on a miss", sub(checks.sphere_roots))]),
-                "roots within 1e-9 × max(|t1|, radius) of exact arithmetic; misses are inf", expected="none",
+                f"roots within {TOL.FLOAT64} × max(|t1|, radius) of exact arithmetic; misses are inf", expected="none",
                 truth=truth(truths.sphere_roots), timeout=QUICK, vary=variant(variants.intersect_sphere))
 
 
@@ -95,7 +96,7 @@ def triangle_test(name, points, edge_case=False, **params) -> Test:
     """``edge_case``: every right answer is a miss (zero-area triangles), so it counts only beside a passing W3 test."""
     return Test(name, "W3", points, "intersect_triangle", params,
                 all_of([("hits and misses against exact arithmetic", sub(checks.triangle_hits))]),
-                "t within 1e-9 relative of exact arithmetic; misses inf", expected="none",
+                f"t within {TOL.FLOAT64} relative of exact arithmetic; misses inf", expected="none",
                 truth=truth(truths.triangle_hits), edge_case=edge_case, timeout=QUICK,
                 vary=variant(variants.intersect_triangle if edge_case else variants.triangle_rays))
 
@@ -144,7 +145,7 @@ def depth_test(name, points, scene, size) -> Test:
                 all_of([("primary visibility matches a rasteriser", sub(checks.depth_visibility)),
                         ("unit normals", sub(checks.depth_normals))],
                        require=["primary visibility matches a rasteriser"]),
-                "hit or miss and depth (5e-3 relative) within the range of pyrender's depth buffer over the pixel's central third, on ≥ 98% of pixels",
+                f"hit or miss and depth ({TOL.DEPTH} relative) within the range of pyrender's depth buffer over the pixel's central third, on ≥ {1 - TOL.DEPTH_BAD:.0%} of pixels",
                 expected="none", given="hit_parts", truth=truth(truths.depth_range), timeout=HITS, depends_on=INTERSECT,
                 vary=variant(variants.closest_hit_image))
 
@@ -158,15 +159,15 @@ def hits_test(name, points, scene, rays=None, size=None, hierarchy=None) -> Test
     if hierarchy is not None:
         params["hierarchy"] = hierarchy
     return Test(name, "W5", points, "closest_hit", params, check(checks.hits_match),
-                "same primitive as the reference on ≥ 99% of rays; t within 1e-6 relative; normals within 1e-6",
+                f"same primitive as the reference on ≥ {TOL.SAME_PRIMITIVE:.0%} of rays; t within {TOL.HITS} relative; normals within {TOL.HITS}",
                 given="hit_parts", timeout=HITS, depends_on=INTERSECT,
                 vary=variant(variants.closest_hit_rays if rays is not None else variants.closest_hit_image))
 
 
 def shading_test(name, points, **params) -> Test:
     return Test(name, "W6", points, "local_shading", params,
-                array_close("colour", rtol=1e-9, atol=1e-12, what="the colour"),
-                "within 1e-9 relative of the formula", expected="none", truth=truth(truths.shading), timeout=QUICK,
+                array_close("colour", rtol=TOL.FLOAT64, atol=TOL.FLOAT64_ATOL, what="the colour"),
+                f"within {TOL.FLOAT64} relative of the formula", expected="none", truth=truth(truths.shading), timeout=QUICK,
                 vary=variant(variants.local_shading))
 
 
@@ -176,14 +177,14 @@ def shadow_test(name, points, scene, origins, targets) -> Test:
                 all_of([("transmission through every surface crossed", sub(checks.shadow_values)),
                         ("shadow rays counted", sub(checks.shadow_counted))],
                        earn_with=["transmission through every surface crossed"]),
-                "within 1e-9 of a brute-force walk over the objects", expected="none",
+                f"within {TOL.FLOAT64} of a brute-force walk over the objects", expected="none",
                 truth=truth(truths.transmission), timeout=HITS, depends_on=INTERSECT,
                 vary=variant(variants.shadow_transmission))
 
 
 def reflect_test(name, points, **params) -> Test:
-    return Test(name, "W8", points, "reflect", params, array_close("r", rtol=0, atol=1e-9, what="the reflected directions", plural=True),
-                "within 1e-9", expected="none", truth=truth(truths.reflect), timeout=QUICK, vary=variant(variants.reflect))
+    return Test(name, "W8", points, "reflect", params, array_close("r", rtol=0, atol=TOL.FLOAT64, what="the reflected directions", plural=True),
+                f"within {TOL.FLOAT64}", expected="none", truth=truth(truths.reflect), timeout=QUICK, vary=variant(variants.reflect))
 
 
 def refract_test(name, points, **params) -> Test:
@@ -191,13 +192,13 @@ def refract_test(name, points, **params) -> Test:
                 all_of([("total internal reflection", sub(checks.refract_mask)),
                         ("refracted directions", sub(checks.refract_directions))],
                        earn_with=["refracted directions"]),
-                "TIR mask exact; directions within 1e-9 of Snell's law by angles", expected="none",
+                f"TIR mask exact; directions within {TOL.FLOAT64} of Snell's law by angles", expected="none",
                 truth=truth(truths.refract), timeout=QUICK, vary=variant(variants.refract))
 
 
 def fresnel_test(name, points, **params) -> Test:
-    return Test(name, "W10", points, "fresnel", params, array_close("f", rtol=0, atol=1e-9, what="the reflectance"),
-                "within 1e-9 of Fresnel's equations in sine/tangent form", expected="none",
+    return Test(name, "W10", points, "fresnel", params, array_close("f", rtol=0, atol=TOL.FLOAT64, what="the reflectance"),
+                f"within {TOL.FLOAT64} of Fresnel's equations in sine/tangent form", expected="none",
                 truth=truth(truths.fresnel), timeout=QUICK, vary=variant(variants.fresnel))
 
 

@@ -61,6 +61,39 @@ class Probes(dict):
         return fn
 
 
+class Tolerance(float):
+    """A grading tolerance: a float, to use wherever the number goes, that carries why it has its value. A stage keeps
+    its own in one table (``cs451/stages/<stage>/tolerances.py``); the tests' descriptions print them (``f"{tol}"``
+    gives ``1e-9``, not ``1e-09``), so a description and its check cannot disagree."""
+    why: str
+
+    def __new__(cls, value: float, why: str) -> "Tolerance":
+        made = super().__new__(cls, value)
+        made.why = why
+        return made
+
+    def __reduce__(self) -> tuple:
+        return Tolerance, (float(self), self.why)
+
+    def __str__(self) -> str:
+        value = float(self)
+        if value != 0 and abs(value) < 1e-2:
+            mantissa, exponent = f"{value:.0e}".split("e")
+            return f"{mantissa}e{int(exponent)}"
+        return f"{value:g}"
+
+    def __format__(self, spec: str) -> str:
+        return str(self) if not spec else float(self).__format__(spec)
+
+    def __repr__(self) -> str:
+        return f"Tolerance({str(self)})"
+
+
+def tolerance_table(module: Any) -> dict[str, Tolerance]:
+    """A stage's tolerances by name, from its ``tolerances`` module (for the docs and the tests)."""
+    return {name: value for name, value in vars(module).items() if isinstance(value, Tolerance)}
+
+
 @dataclass(frozen=True)
 class Stage:
     name: str                 # "sphere": CLI name and folder under reference/ and starter/
@@ -128,6 +161,10 @@ class Stage:
         data = dict(scene.options.get(self.name, {}))
         data.update({k: v for k, v in overrides.items() if v is not None})
         return schema.parse_record(self.options_type, data, schema.Context(scene.label, f"options.{self.name}"))
+
+    def draws_scene(self, scene: Any) -> bool:
+        """Whether every object and light of ``scene`` is a kind this stage draws (:meth:`check_scene` says which not)."""
+        return all(isinstance(item, self.draws) for group in ("objects", "lights") for item in getattr(scene, group))
 
     def check_scene(self, scene: Any) -> None:
         """Refuse a scene holding an object or light this stage does not draw, naming the first and the stage."""

@@ -17,6 +17,7 @@ import numpy as np
 from ... import schema
 from ...errors import KitError
 from ...gl import compile_program, create_context
+from .tolerances import SAME_QUERY
 from ...scene import Camera, DirectionalLight, Group, PointLight, Scene, Sphere, parse_scene, walk_objects
 from ...schema import Context, field
 from ..base import Out, Probes, Stage, Task, functions_replaced, part
@@ -301,7 +302,7 @@ def probe_reshape(impl: Any, width: int, height: int, camera: dict, perspective_
             def answered(*args: Any, **kwargs: Any) -> Any:
                 values = list(args) + [kwargs[k] for k in PERSPECTIVE_ARGS[len(args):] if k in kwargs]
                 try:
-                    same = len(values) == 4 and np.allclose(np.asarray(values, float), perspective_query, rtol=1e-12, atol=0)
+                    same = len(values) == 4 and np.allclose(np.asarray(values, float), perspective_query, rtol=SAME_QUERY, atol=0)
                 except (TypeError, ValueError):
                     same = False
                 return np.array(perspective_answer) if same else own(*args, **kwargs)

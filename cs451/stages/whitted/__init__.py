@@ -18,6 +18,7 @@ from ...errors import KitError
 from ...scene import AreaLight, Camera, Mesh, Plane, PointLight, Polygon, Scene, Sphere, parse_scene
 from ...schema import Context, field
 from ..base import Out, Probes, Stage, Task, as_array, functions_replaced, part
+from . import tolerances
 
 RAYS = "len(origins)"
 TASKS = (
@@ -137,8 +138,8 @@ BVH_GIVEN = {k: f"bvh_{k}" for k in tracescene.BVH_KEYS}
 #: and whether each holds a vector (3 columns) per ray.
 OPTICS = {"W8": ((("d", 3), ("n", 3)), (("r", 3),)), "W9": ((("d", 3), ("n", 3), ("eta", 1)), (("t", 3), ("tir", 1))),
           "W10": ((("cos", 1), ("eta", 1)), (("f", 1),))}
-#: Queries match when they agree to this, after rounding: far above the rounding of a correct trace's rays.
-ANSWER_DIGITS = 1e-9
+#: Queries match when they agree to this, after rounding (the stage's table says why).
+ANSWER_DIGITS = tolerances.ANSWER_DIGITS
 
 
 def _given_bvh(given: dict[str, np.ndarray]) -> dict[str, np.ndarray] | None:

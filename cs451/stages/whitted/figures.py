@@ -15,15 +15,22 @@ from ...slides.registry import Drawn, slide_figure
 from ...slides.canvas import (Panel, axes_plot, encoded, panel_grid, project, reference_impl, scene_data,
                               stacked, visible_segment)
 from .accel import forced
-from ..hemicube.figures import camera_matrix
 from .figure_rays import ray_tree
+from .ray_tree import Pinhole
 
 
 WHITTED_KIT = ("cs451.stages.whitted", "cs451.stages.base", "cs451.tracescene", "cs451.scene", "cs451.viewing",
-               "cs451.imageio", "cs451.stages.whitted.figure_rays", "cs451.stages.hemicube.figures")
+               "cs451.imageio", "cs451.stages.whitted.figure_rays", "cs451.stages.whitted.ray_tree")
 #: how each kind of ray is drawn (colour, line style); shadow rays by what reaches the point
 RAY_STYLE = {"camera": ("white", "-"), "reflection": ("#33d6ff", "-"), "refraction": ("#ff5ce1", "-"),
              "lit": ("#ffd21f", "--"), "dimmed": ("#ff9a1f", "--"), "blocked": ("#8a8a8a", ":")}
+
+
+def camera_matrix(camera: Any, size: tuple[int, int]) -> np.ndarray:
+    """Projection · view of a scene camera (clip space, as :func:`cs451.slides.canvas.project` reads it), fitted to the
+    reference's own camera rays (W1) as the demo fits its pinhole: no other stage's view function needed."""
+    rays = get_stage("whitted").call(reference_impl("whitted"), "W1", camera, *size)
+    return Pinhole(*rays, size[0], size[1], 1).clip_matrix()
 
 
 def _whitted(data: dict[str, Any], size: tuple[int, int], **options: Any) -> tuple[np.ndarray, dict[str, int]]:

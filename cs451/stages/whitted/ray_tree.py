@@ -123,6 +123,13 @@ class Pinhole:
         #: whether the camera rays are a pinhole's (one eye, directions through a plane): else no tree is drawn
         self.ok = bool(np.all(q[:, 2] > 0) and np.nanmax(err) < 0.05 and spread <= 1e-9 * (1 + np.abs(self.eye).max()))
 
+    def clip_matrix(self) -> np.ndarray:
+        """The pinhole as a 4 × 4 from world points to clip space, as a GL camera's projection · view: x and y over
+        [-1, 1] across the image (y up), w the depth along the view axis."""
+        m = self.m / np.linalg.norm(self.m[2])
+        rows = np.stack([2.0 * m[0] - m[2], m[2] - 2.0 * m[1], m[2], m[2]])
+        return np.c_[rows, -rows @ self.eye]
+
     def segment(self, a: np.ndarray, b: np.ndarray) -> tuple[tuple[float, float], tuple[float, float]] | None:
         """The part of segment a-b in front of the eye, in image pixels (x right, y down), clipped near the image."""
         qa, qb = self.m @ (a - self.eye), self.m @ (b - self.eye)
