@@ -20,7 +20,7 @@ from cs451 import KIT_ROOT
 from conftest import world_readable_dir
 
 TOY_STAGE = '''\
-"""Stage 5 (a toy, for the architecture test): scale a colour; the image is the scaled colour."""
+"""Stage 6 (a toy, for the architecture test): scale a colour; the image is the scaled colour."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -62,7 +62,7 @@ def probe_scale(impl: Any, values: list, factor: float) -> dict[str, np.ndarray]
     return {"scaled": STAGE.call(impl, "T1", np.asarray(values, dtype=np.float64), float(factor))}
 
 
-STAGE = Stage(name="toy", number=5, title="A toy stage", handout="05-toy", tasks=TASKS, render=render,
+STAGE = Stage(name="toy", number=6, title="A toy stage", handout="06-toy", tasks=TASKS, render=render,
               probes=PROBES, options_type=ToyOptions, draws=(Polygon, AreaLight))
 '''
 
@@ -91,7 +91,7 @@ TESTS = [Test("T1 scale: {name}", "T1", {points}, "scale", {{"values": {values},
 '''
 
 TOY_HANDOUT = '''\
-# Stage 5: a toy stage
+# Stage 6: a toy stage
 
 Scale a colour. Render it with `cs451 render cornell-box --stage toy -o toy.png` and check it with
 `cs451 grade toy --public-only`.
@@ -123,7 +123,7 @@ RECIPE = {
                                                  factor=2.0),
     "autograder/toy/hidden.py": TOY_TESTS.format(kind="hidden", name="halves", points=20, values=[1.0, 3.0],
                                                  factor=0.5),
-    "assignments/05-toy/README.md": TOY_HANDOUT,
+    "assignments/06-toy/README.md": TOY_HANDOUT,
 }
 DERIVED = {"starter/toy/__init__.py", "starter/toy/scale.py"}
 

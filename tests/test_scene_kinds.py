@@ -81,7 +81,8 @@ def base_scene(stage: str) -> dict:
 def with_item(stage: str, kind: str) -> dict:
     data = base_scene(stage)
     group = "lights" if kind in Light._registry else "objects"
-    data[group] = list(data.get(group, [])) + [ITEMS[kind]]
+    kept = [item for item in data.get(group, []) if not (kind == "area" and item.get("type") == "area")]
+    data[group] = kept + [ITEMS[kind]]        # the area light replaces the base's: stage 5 samples exactly one
     return data
 
 

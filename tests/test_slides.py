@@ -40,12 +40,12 @@ from cs451.errors import KitError
 from cs451.slides.build import CSP, assets, build_slides, versions
 from cs451.slides.deck import deck_files, read_deck
 
-DECKS = ("overview", "sphere", "whitted", "hemicube", "radiosity")
+DECKS = ("overview", "sphere", "whitted", "hemicube", "radiosity", "pathtrace")
 #: The figures the decks use, as agreed with cs451/slides/figures.py.
 FIGURE_NAMES = ("sphere-gouraud-vs-phong", "sphere-light-spaces", "sphere-modelview", "whitted-ray-tree",
                 "whitted-ray-kinds", "whitted-cutoff", "whitted-hierarchy", "hemicube-views", "hemicube-item-buffer",
                 "hemicube-delta-weights", "hemicube-row", "radiosity-progress", "radiosity-gouraud", "bench-whitted",
-                "bench-hemicube", "bench-radiosity")
+                "bench-hemicube", "bench-radiosity", "pathtrace-convergence")
 #: The reference function each stub figure pretends to be drawn with (its source enters the stub's key).
 STUB_SOURCES = {"hemicube-delta-weights": ("reference/hemicube/tables.py", "delta_form_factors"),
                 "radiosity-progress": ("reference/radiosity/shooting.py", "shoot")}

@@ -125,6 +125,9 @@ class Stage:
     warm: Callable[[Any], list[tuple[str, Callable[[], Any]]]] | None = None
     #: the module of the stage's speed layer (instructor-side, see :meth:`accelerated`), or None
     accelerator: str | None = None
+    #: scene_check(scene): refuse, in one KitError naming the field, a scene of drawn kinds the stage still cannot
+    #: render (stage 5: not exactly one area light); run by :meth:`check_scene` before any work
+    scene_check: Callable[[Any], None] | None = None
 
     def task(self, task_id: str) -> Task:
         for t in self.tasks:
@@ -163,8 +166,13 @@ class Stage:
         return schema.parse_record(self.options_type, data, schema.Context(scene.label, f"options.{self.name}"))
 
     def draws_scene(self, scene: Any) -> bool:
-        """Whether every object and light of ``scene`` is a kind this stage draws (:meth:`check_scene` says which not)."""
-        return all(isinstance(item, self.draws) for group in ("objects", "lights") for item in getattr(scene, group))
+        """Whether the stage draws ``scene``: every object and light of a kind it draws, and its own check passed
+        (:meth:`check_scene` says why not)."""
+        try:
+            self.check_scene(scene)
+        except KitError:
+            return False
+        return True
 
     def check_scene(self, scene: Any) -> None:
         """Refuse a scene holding an object or light this stage does not draw, naming the first and the stage."""
@@ -174,6 +182,8 @@ class Stage:
                     kinds = sorted({_kind(c) for c in self.draws})
                     raise KitError(f"{scene.label}: {group}[{k}]: stage {self.number} ({self.name}) does not draw a "
                                    f"{_kind(type(item))} (it draws: {', '.join(kinds)})")
+        if self.scene_check is not None:
+            self.scene_check(scene)
 
     def check_cost(self, scene: Any, size: tuple[int, int] | None = None) -> None:
         """Refuse, before any work, a render of ``scene`` that would not fit in this machine's memory budget."""

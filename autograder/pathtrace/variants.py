@@ -1,0 +1,60 @@
+"""Stage 5's fresh cases: each public test's case with new numbers of the same kind. Not shipped to students.
+
+Every fresh case also draws a fresh seed, so the statistical tests see new random numbers: a solution cannot be
+tuned to the shipped seed's samples.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from cs451.grading.spec import Case
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def _seed(rng: np.random.Generator) -> int:
+    return int(rng.integers(1, 2 ** 31))
+
+
+def normals(p: dict, rng: np.random.Generator) -> Case:
+    """As many fresh unit normals (one of them straight down), a fresh seed."""
+    n = _unit(rng.normal(size=(len(p["normals"]), 3)))
+    n[0] = [0.0, 0.0, -1.0] if len(n) > 1 else n[0]
+    return Case({**p, "normals": np.round(n, 12).tolist(), "seed": _seed(rng)}, f"{len(n)} fresh normals")
+
+
+def points(p: dict, rng: np.random.Generator) -> Case:
+    """As many fresh points on the floor (x, z in [-0.9, 0.9]), fresh colours, a fresh seed; normals as they were."""
+    k = len(p["points"])
+    x = np.c_[rng.uniform(-0.9, 0.9, k), np.zeros(k), rng.uniform(-0.9, 0.9, k)]
+    albedo = rng.uniform(0.1, 0.95, (k, 3))
+    return Case({**p, "points": np.round(x, 4).tolist(), "albedo": np.round(albedo, 3).tolist(), "seed": _seed(rng)},
+                f"{k} fresh points and colours on the floor")
+
+
+def weights(p: dict, rng: np.random.Generator) -> Case:
+    """Fresh weights of the same kinds (most below 1, some above, two zero) and fresh numbers u."""
+    k = len(p["weights"])
+    beta = rng.uniform(0, 1, (k, 3))
+    beta[: k // 6] *= 2.5
+    beta[-2:] = 0.0
+    return Case({"weights": np.round(beta, 6).tolist(), "u": np.round(rng.random(k), 6).tolist()},
+                f"{k} fresh weights and uniform numbers")
+
+
+def light_rays(p: dict, rng: np.random.Generator) -> Case:
+    """Fresh rays of the same three kinds: up into the light's front, down onto its back, and into nothing."""
+    def at(y, spread):
+        return np.c_[rng.uniform(-spread, spread, 2), [y, y], rng.uniform(-spread, spread, 2)]
+    up = _unit(np.c_[rng.uniform(-0.05, 0.05, 2), [1, 1], rng.uniform(-0.05, 0.05, 2)])
+    origins = np.r_[at(0.9, 0.15), at(1.4, 0.15), [[0, 1.5, 0], [-2, 0.5, 0]]]
+    directions = np.r_[up, -up, [[0, 1, 0], [-1, 0, 0]]]
+    return Case({**p, "origins": np.round(origins, 6).tolist(), "directions": np.round(directions, 12).tolist()},
+                "fresh rays to the light's front, onto its back and into nothing")
+
+
+def seed(p: dict, rng: np.random.Generator) -> Case:
+    """The same surfaces with a fresh seed: new points on them and new paths."""
+    return Case({**p, "seed": _seed(rng)}, "new random points and paths")
