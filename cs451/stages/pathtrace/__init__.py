@@ -59,7 +59,7 @@ def prepare(scene: Scene, max_depth: int | None = None, roulette_depth: int | No
     return paths.build(scene, opts.max_depth, opts.roulette_depth)
 
 
-def camera_rays(impl: Any, camera: Camera, width: int, height: int, jitter: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def pixel_rays(impl: Any, camera: Camera, width: int, height: int, jitter: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The submission's camera rays (given in its starter, ``geometry.camera_rays``), checked."""
     fn = getattr(impl, "camera_rays", None)
     if fn is None:
@@ -82,7 +82,7 @@ def render_traced(scene: Scene, impl: Any, size: tuple[int, int] | None = None, 
     bar = Progress(f"path tracing {width}x{height}", opts.spp, unit="spp")
     try:
         for k in range(opts.spp):
-            o, d = camera_rays(impl, scene.camera, width, height, rng.random((width * height, 2)))
+            o, d = pixel_rays(impl, scene.camera, width, height, rng.random((width * height, 2)))
             total += STAGE.call(impl, "P4", ps, o, d, rng)
             bar.advance()
             if on_pass is not None:

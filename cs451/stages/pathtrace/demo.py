@@ -79,7 +79,7 @@ class PathDemo:
     def step(self, seconds: float) -> bool:
         """One pass (a path per pixel); True when the sample count reaches a power of two (a frame worth keeping)."""
         started = time.perf_counter()
-        o, d = P.camera_rays(self.module, self.scene.camera, self.width, self.height,
+        o, d = P.pixel_rays(self.module, self.scene.camera, self.width, self.height,
                              self.rng.random((self.width * self.height, 2)))
         self.total += P.STAGE.call(self.module, "P4", self.paths, o, d, self.rng)
         self.passes += 1
