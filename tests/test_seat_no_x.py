@@ -94,5 +94,9 @@ def test_every_stage_renders_grades_and_demos_without_x(stage, tmp_path):
 
 
 def _scene(stage: str) -> str:
-    """A scene the stage draws: its own default."""
-    return {"sphere": "sphere", "whitted": "whitted", "hemicube": "cornell-box", "radiosity": "cornell-box"}[stage]
+    """A scene the stage draws: the bundled scene named after it, else the Cornell box (asked of the stage)."""
+    from cs451.scene import BUNDLED_DIR, load_scene
+    from cs451.stages import get_stage
+    name = stage if (BUNDLED_DIR / f"{stage}.json").exists() else "cornell-box"
+    assert get_stage(stage).draws_scene(load_scene(name)), f"stage {stage} draws neither its own scene nor the box"
+    return name
