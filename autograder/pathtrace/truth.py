@@ -60,16 +60,20 @@ def _seen(scene, x: np.ndarray, y: np.ndarray) -> bool:
     from cs451.patching import radiosity_surfaces
     quads, _, _, _ = radiosity_surfaces(scene)
     for q, n in zip(quads, patch_normals(quads)):
-        denominator = float(n @ (y - x))
-        if denominator == 0.0:
-            continue
-        t = float(n @ (q[0] - x)) / denominator
-        if not 1e-9 < t < 1.0 - 1e-7:
-            continue
-        hit = x + t * (y - x)
-        if all(float(np.cross(q[(k + 1) % 4] - q[k], hit - q[k]) @ n) >= 0 for k in range(4)):
+        t = _crossing(q, n, x, y - x)
+        if t is not None and 1e-9 < t < 1.0 - 1e-7:
             return False
     return True
+
+
+def _crossing(q: np.ndarray, n: np.ndarray, o: np.ndarray, d: np.ndarray) -> float | None:
+    """Where the line o + t·d meets the convex quad q (unit normal n), by its plane and its edges; None if it misses."""
+    denominator = float(n @ d)
+    if denominator == 0.0:
+        return None
+    t = float(n @ (q[0] - o)) / denominator
+    hit = o + t * d
+    return t if all(float(np.cross(q[(k + 1) % 4] - q[k], hit - q[k]) @ n) >= 0 for k in range(4)) else None
 
 
 def _samples(p: dict) -> tuple:
@@ -140,12 +144,8 @@ def light_seen(p: dict) -> dict[str, np.ndarray]:
     for o, d in zip(np.asarray(p["origins"], float), np.asarray(p["directions"], float)):
         nearest, which = math.inf, None
         for k, (q, n) in enumerate(zip(quads, normals)):
-            den = float(n @ d)
-            if den == 0.0:
-                continue
-            t = float(n @ (q[0] - o)) / den
-            hit = o + t * d
-            if t > 0 and t < nearest and all(float(np.cross(q[(j + 1) % 4] - q[j], hit - q[j]) @ n) >= 0 for j in range(4)):
+            t = _crossing(q, n, o, d)
+            if t is not None and 0 < t < nearest:
                 nearest, which = t, k
         if which is not None and labels[which] != f"lights[{light}]":
             raise ValueError(f"a ray meets {labels[which]} first: the test must aim at the light or at nothing")
