@@ -17,6 +17,9 @@ Three parts, printed as tables and written to ``hemicube.json`` and ``hemicube.p
 3. Ray casting (Monte Carlo, Embree) on the same scene, rays from each patch's centre so
    that it estimates the same quantity as the hemicube, with the same error measure, at
    increasing sample counts; and the time each method needs for the full matrix at equal error.
+4. Occlusion (:mod:`bench.hemicube_occluded`): the Cornell box as whole polygons and cut 4 × 4, where
+   patches hide each other, against the area average (ray casting from random points): the plain
+   hemicube, the proximity fix and the split shooter, timed.
 """
 from __future__ import annotations
 
@@ -33,6 +36,7 @@ from cs451.gl import create_context, renderer_name
 from cs451.impl import load_impl, resolve_impl
 from cs451.patches import patch_areas, scene_polygons
 
+from bench.hemicube_occluded import occluded, print_occluded
 from bench.meshes import subdivide_uniform
 from cs451.scene import load_scene
 from cs451.stages.hemicube import calls
@@ -246,6 +250,9 @@ def main(output: Path, quick: bool = False) -> None:
         box["equal_error"] = []
         _finish(output, ctx, quick, forms, box, resolutions, howell)
         return
+    hidden = occluded(impl, [r for r in resolutions if r <= 512], ctx, (1,) if quick else (1, 4))
+    print_occluded(hidden)
+    box["occluded"] = hidden
     print("\nRay casting (Embree, cosine-weighted rays from each patch's centre), same scene, same error measure")
     print(f"{'rays/patch':>10s} {'error':>9s} {'matrix s':>9s} {'ms/row':>8s}")
     for r in box["raycast"]:

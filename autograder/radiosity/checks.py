@@ -86,7 +86,19 @@ def loop_matches(out, expected, p) -> Verdict:
     if not (np.allclose(B, expected["radiosity"], rtol=TOL.LOOP_RTOL, atol=TOL.FLOAT64_ATOL)
             and np.allclose(dB, expected["unshot"], rtol=TOL.LOOP_RTOL, atol=TOL.FLOAT64_ATOL)):
         return Verdict(0.5, "the order of shots is right but B or ΔB are not")
+    fetched = _rows_fetched(out, len(order))
+    if fetched:
+        return Verdict(0.5, f"B and ΔB are right, but {fetched}")
     return Verdict(1.0, f"{len(order)} shots in the right order with the right B and ΔB")
+
+
+def _rows_fetched(out, shots: int) -> str | None:
+    """A row of form factors is the costly thing (a hemicube each): asked for once per shot, none past the stop."""
+    asked = int(output(out, "rows_requested", (), "rows_requested"))
+    if asked != shots:
+        return (f"row() was called {asked} times for {shots} shots (ask for a patch's row when it shoots, once, "
+                f"and stop before asking for the next)")
+    return None
 
 
 def _shots_like_reference(out, expected, low: float = 1 / (1 + TOL.SHOTS), high: float = 1 + TOL.SHOTS) -> str | None:
@@ -130,6 +142,9 @@ def converged_to_direct(out, expected, p, within: float) -> Verdict:
         return Verdict(0.0, f"converged, but {shots}", detail=detail)
     if rows > shooters:
         return Verdict(0.5, f"converged, but fetched {rows} rows for {shooters} shooters (fetch a row only to shoot)", detail=detail)
+    fetched = _rows_fetched(out, len(order))
+    if fetched:
+        return Verdict(0.5, f"converged, but {fetched}", detail=detail)
     return Verdict(1.0, f"within {err:.1e} of the direct solve; {rows} rows for {shooters} shooters", detail=detail)
 
 

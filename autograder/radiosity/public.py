@@ -73,6 +73,8 @@ def random_system(n: int, seed: int, closed: bool = False) -> dict:
 
 #: Six patches where the notes' sweeps (§2.5) and "always the current maximum" part ways at the fifth shot.
 SIX = random_system(6, seed=7)
+#: Five patches, nothing leaving: the tolerance is reached in the middle of a sweep.
+CLOSED_FIVE = random_system(5, seed=5, closed=True)
 
 
 def furnace_cube(albedo: float, emission: float = 1.0) -> dict:
@@ -164,6 +166,16 @@ def _grid_patches() -> tuple[list, list, list]:
 GRID = _grid_patches()
 
 
+def fan_patches(sides: int, radius: float, turn: float = 0.0) -> tuple[list, list]:
+    """A regular polygon fanned from its first corner into triangles, each stored as a quad repeating its last
+    corner, as the kit stores a polygon of more than four corners: the corner a triangle repeats is the next
+    triangle's second, so a vertex colour that counts a patch once per corner weighs it twice there."""
+    angles = np.radians(turn) + 2 * np.pi * np.arange(sides) / sides
+    v = np.column_stack([radius * np.cos(angles), radius * np.sin(angles), np.zeros(sides)])
+    quads = [[v[0], v[k], v[k + 1], v[k + 1]] for k in range(1, sides - 1)]
+    return lists(np.array(quads)), [0] * len(quads)
+
+
 def _triangle_beside_quad() -> tuple[list, list, list]:
     """A triangle (its last corner repeated) cut into patches beside a quad: a repeated corner is one vertex."""
     polygons = np.array([[[0, 0, 0], [1.5, 0, 0], [0, 1.5, 0], [0, 1.5, 0]], [[1.5, 0, 0], [1.5, 1.5, 0], [0, 1.5, 0],
@@ -176,27 +188,33 @@ def _triangle_beside_quad() -> tuple[list, list, list]:
 OVERSHOT = [[-5.0, -2.5, -1.0], [4.5, 1.8, 0.54], [2.4, 0.3, 0.36]]
 
 TESTS = [
-    subdivide_test("R1 subdivide: the Cornell box at 100 mm", 6, scene_quads("cornell-box"), 100.0),
+    subdivide_test("R1 subdivide: the Cornell box at 100 mm", 5, scene_quads("cornell-box"), 100.0),
     subdivide_test("R1 subdivide: a triangle and a quad", 4,
                    [[[0, 0, 0], [4, 0, 0], [0, 3, 0], [0, 3, 0]], [[0, 0, 1], [2, 0, 1], [2, 0.5, 1], [0, 1, 1]]], 1.0),
     subdivide_test("R1 subdivide: max_edge 0 keeps the quads", 1, scene_quads("furnace"), 0.0),
+    subdivide_test("R1 subdivide: a negative max_edge keeps the quads too", 1, scene_quads("room", 4), -0.5),
     shoot_test("R2 shoot: the hand-worked emitter shoots", 5, HAND, 0),
     shoot_test("R2 shoot: a receiver shoots back, B and ΔB already set", 5, HAND, 1,
                radiosity=[[10.0, 5.0, 2.0], [3.0, 1.2, 0.36], [1.6, 0.2, 0.24]],
                unshot=[[0.0, 0.0, 0.0], [3.0, 1.2, 0.36], [1.6, 0.2, 0.24]]),
-    by_hand_test("R3 progressive_refinement: the hand-worked scene, 4 shots (patch 1 shoots twice)", 5, HAND, 4),
+    by_hand_test("R3 progressive_refinement: the hand-worked scene, 4 shots (patch 1 shoots twice)", 4, HAND, 4),
     by_hand_test("R3 progressive_refinement: the hand-worked scene to 1e-6", 4, HAND, 10_000, tolerance=1e-6),
     by_hand_test("R3 progressive_refinement: six patches, 14 shots, each sweep in the order of its keys at its start",
                  2, SIX, 14),
     by_hand_test("R3 progressive_refinement: the hand-worked scene overshooting (ω = 1.5), 6 shots", 3, HAND, 6,
                  overshoot=1.5),
-    furnace_test("R3 progressive_refinement: the furnace, ρ = 0.9", 6, 0.9, 1e-4),
-    scene_solve_test("R3 progressive_refinement: the Cornell box converges to the direct solve", 8, CORNELL, 140.0),
+    by_hand_test("R3 progressive_refinement: a closed random system to 1e-4, which stops in the middle of a sweep "
+                 "(the unshot energy checked before every shot, not only as a sweep starts)", 3, CLOSED_FIVE, 100_000,
+                 tolerance=1e-4),
+    furnace_test("R3 progressive_refinement: the furnace, ρ = 0.9", 5, 0.9, 1e-4),
+    scene_solve_test("R3 progressive_refinement: the Cornell box converges to the direct solve", 7, CORNELL, 140.0),
     ambient_test("R4 ambient_term: the hand-worked scene after one shot", 6, HAND["areas"], HAND["reflectance"],
                  [[0.0, 0.0, 0.0], [3.0, 1.2, 0.36], [1.6, 0.2, 0.24]]),
     ambient_test("R4 ambient_term: after an overshot shot (a negative ΔB counts with its sign)", 2, HAND["areas"],
                  HAND["reflectance"], OVERSHOT),
-    vertex_test("R5 vertex_colors: three walls of the furnace, 3 × 3 patches each", 6, *GRID, "grid"),
-    vertex_test("R5 vertex_colors: a triangle (repeated corner) beside a quad", 2, *_triangle_beside_quad(), "triangle"),
+    vertex_test("R5 vertex_colors: three walls of the furnace, 3 × 3 patches each", 4, *GRID, "grid"),
+    vertex_test("R5 vertex_colors: a triangle (repeated corner) beside a quad", 1, *_triangle_beside_quad(), "triangle"),
+    vertex_test("R5 vertex_colors: a hexagon fanned into triangles, each repeating a corner the next one shares", 3,
+                *fan_patches(6, 1.0), lists(np.random.default_rng(9).uniform(0, 1, (4, 3))), "fan"),
     render_test("R5 render: the Cornell box", 8, CORNELL, (128, 128), 100.0),
 ]

@@ -120,8 +120,10 @@ def shoot_by_hand(i: int, F, areas, reflectance, radiosity, unshot) -> tuple[lis
 
 
 def progressive_by_hand(F, areas, reflectance, emission, tolerance: float, max_shots: int,
-                        overshoot: float = 1.0) -> tuple[np.ndarray, np.ndarray, list[int]]:
-    """The notes' shooting loop (§2.5) with a sort for each sweep's order (keys at its start; ties to the lower index)."""
+                        overshoot: float = 1.0, stop_within_sweeps: bool = True) -> tuple[np.ndarray, np.ndarray, list[int]]:
+    """The notes' shooting loop (§2.5) with a sort for each sweep's order (keys at its start; ties to the lower index).
+    ``stop_within_sweeps=False`` is a mistake the fresh cases must be able to tell: the tolerance checked only as a
+    sweep starts, as if the keys stayed frozen through it."""
     B = [list(map(float, r)) for r in emission]
     dB = [list(map(float, r)) for r in emission]
     emitted = sum(sum(e) * a for e, a in zip(emission, areas))
@@ -136,7 +138,8 @@ def progressive_by_hand(F, areas, reflectance, emission, tolerance: float, max_s
         if not sweep:
             break
         for i in sweep:
-            if len(order) >= max_shots or sum(keys()) <= tolerance * emitted:
+            checked = stop_within_sweeps or i == sweep[0]
+            if len(order) >= max_shots or (checked and sum(keys()) <= tolerance * emitted):
                 return np.array(B), np.array(dB), order
             left = [(1 - overshoot) * x for x in dB[i]]
             dB[i] = [overshoot * x for x in dB[i]]
@@ -205,6 +208,14 @@ def shooting_loop(p: dict) -> dict[str, np.ndarray]:
     B, dB, order = progressive_by_hand(p["F"], p["areas"], p["reflectance"], p["emission"], p["tolerance"],
                                        p["max_shots"], p.get("overshoot", 1.0))
     return {"radiosity": B, "unshot": dB, "order": np.array(order, dtype=np.int64)}
+
+
+def stops_within_a_sweep(p: dict) -> bool:
+    """Whether the tolerance stops this loop in the middle of a sweep (so a loop checking it only as sweeps start,
+    with frozen keys, shoots more)."""
+    frozen = progressive_by_hand(p["F"], p["areas"], p["reflectance"], p["emission"], p["tolerance"], p["max_shots"],
+                                 p.get("overshoot", 1.0), stop_within_sweeps=False)[2]
+    return frozen != shooting_loop(p)["order"].tolist()
 
 
 def ambient(p: dict) -> np.ndarray:

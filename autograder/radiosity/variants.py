@@ -80,6 +80,11 @@ def _greedy_order(s: dict, max_shots: int) -> list[int]:
     return order
 
 
+def _closed(p: dict) -> bool:
+    """Whether a system's rows sum to 1 somewhere (a closed scene: nothing leaves it)."""
+    return bool(np.isclose(np.asarray(p["F"]).sum(axis=1).max(), 1.0))
+
+
 def progressive(p: dict, rng: np.random.Generator) -> Case:
     """A fresh system of as many patches with the same shots, tolerance and overshooting kind, searched until it
     shows what the shipped one shows (a patch shooting twice; the sweeps parting from the current maximum)."""
@@ -91,7 +96,7 @@ def progressive(p: dict, rng: np.random.Generator) -> Case:
             system = _hand_sized(rng)
         else:
             from autograder.radiosity.public import random_system
-            system = random_system(n, int(rng.integers(1 << 30)))
+            system = random_system(n, int(rng.integers(1 << 30)), closed=_closed(p))
         params = {**system, "tolerance": p["tolerance"], "max_shots": shots, "overshoot": overshoot}
         order = truths.shooting_loop(params)["order"].tolist()
         twice = len(set(order)) < len(order)
@@ -99,6 +104,8 @@ def progressive(p: dict, rng: np.random.Generator) -> Case:
             continue
         if n > 3 and _greedy_order(system, shots) == order:
             continue
+        if p["tolerance"] > 0 and truths.stops_within_a_sweep(params) != truths.stops_within_a_sweep(p):
+            continue                           # keep what the shipped case shows: a stop in the middle of a sweep
         break
     else:
         raise ValueError("no fresh system with the shipped one's property in 200 tries")
@@ -140,6 +147,14 @@ def vertex_colors(p: dict, rng: np.random.Generator, kind: str) -> Case:
         from autograder.radiosity.public import scene_quads
         polygons, factors = _stretch(scene_quads("furnace", 3), rng)
         edge = num(rng.uniform(0.26, 0.5), 3)
+    elif kind == "fan":
+        from autograder.radiosity.public import fan_patches
+        sides, radius, turn = int(rng.integers(5, 9)), num(rng.uniform(0.5, 3.0), 3), num(rng.uniform(0, 360), 1)
+        patches, parent = fan_patches(sides, radius, turn)
+        radiosity = np.round(rng.uniform(0.0, 2.0, (len(patches), 3)), 4)
+        return Case({"quads": patches, "parent": parent, "radiosity": radiosity.tolist()},
+                    f"a {sides}-gon of radius {radius:g} turned {turn:g}° and fanned from its first corner into "
+                    f"{len(patches)} triangles, random radiosities")
     else:
         polygons = np.array([[[0, 0, 0], [1.5, 0, 0], [0, 1.5, 0], [0, 1.5, 0]],
                              [[1.5, 0, 0], [1.5, 1.5, 0], [0, 1.5, 0], [0, 1.5, 0]]], float)

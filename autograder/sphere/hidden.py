@@ -19,6 +19,10 @@ TWO_LIGHTS = scene_variant(
     objects=[{"type": "sphere", "radius": 1, "material": "white"},
              {"type": "sphere", "radius": 0.5, "center": [1.4, 0.6, -1], "material": "white", "slices": 16, "stacks": 12}])
 
+SHININESS_ZERO_RED = scene_variant(
+    materials={"red": {"diffuse": [0.7, 0.2, 0.2], "specular": [0.3, 0.3, 0.3], "shininess": 0}},
+    objects=[{"type": "sphere", "radius": 1, "material": "red", "slices": 20, "stacks": 14}])
+
 FAR_VIEWER = scene_variant(
     camera={"eye": [2, 3, 7], "center": [0, 0, 0], "up": [0, 1, 0], "fovy": 35, "near": 1, "far": 50},
     options={"sphere": {"local_viewer": False}},
@@ -49,7 +53,8 @@ TESTS = [
     mesh_test("S4 sphere_mesh: radius 0.5, 50 slices, 3 stacks", 4, radius=0.5, slices=50, stacks=3),
     shader_test("S5 Gouraud: shiny red sphere with emission, 256×256", "S5", 2, SHINY_RED, (256, 256)),
     shader_test("S5 Gouraud: two lights, attenuation, two spheres, 200×400", "S5", 2, TWO_LIGHTS, (200, 400)),
-    shader_test("S6 Phong: shiny red sphere, 256×256", "S6", 2, SHINY_RED, (256, 256)),
+    shader_test("S6 Phong: shiny red sphere, 256×256", "S6", 1, SHINY_RED, (256, 256)),
+    shader_test("S6 Phong: shininess 0, 180×240", "S6", 1, SHININESS_ZERO_RED, (180, 240)),
     shader_test("S6 Phong: infinite viewer, oblique camera, 300×200", "S6", 2, FAR_VIEWER, (300, 200)),
     reshape_test("S7 reshape: a minimised window (height 0), another width", 1, width=640, height=0),
     reshape_test("S7 reshape: a tall, narrow window", 1, width=240, height=800),

@@ -130,6 +130,19 @@ COARSE_CLOSE = scene_variant(
     materials={"green": {"diffuse": [0.3, 0.9, 0.5], "specular": [0.6, 0.6, 0.6], "shininess": 30}},
     objects=[{"type": "sphere", "radius": 1, "material": "green", "slices": 8, "stacks": 6}])
 
+#: An infinite viewer (local_viewer false) close to the sphere with a wide view: the half vector, built from
+#: (0, 0, 1) instead of the direction to each point, moves the highlight (OpenGL 2.1 §2.14.1).
+CLOSE_INFINITE_VIEWER = scene_variant(
+    camera={"eye": [0, 0, 2.6], "center": [0, 0, 0], "up": [0, 1, 0], "fovy": 60, "near": 0.5, "far": 20},
+    lights=[{"type": "directional", "direction": [-1, -0.7, -0.6], "diffuse": [0.8, 0.8, 0.8], "specular": [1, 1, 1]}],
+    materials={"green": {"diffuse": [0.2, 0.5, 0.3], "specular": [0.9, 0.9, 0.9], "shininess": 20}},
+    options={"sphere": {"local_viewer": False}})
+
+#: Shininess 0: (n·h)^0 is 1 wherever the light reaches (n·l > 0), n·h = 0 included, where GLSL's pow(0, 0) is
+#: undefined; the specular colour is added there in full.
+SHININESS_ZERO = scene_variant(
+    materials={"green": {"diffuse": [0.3, 0.6, 0.4], "specular": [0.35, 0.3, 0.25], "shininess": 0}})
+
 TESTS = [
     perspective_test("S1 perspective: the handout's 30°, square window", 3, fovy=30, aspect=1.0, near=2, far=100),
     perspective_test("S1 perspective: 60°, wide window", 3, fovy=60, aspect=16 / 9, near=0.5, far=50),
@@ -148,13 +161,17 @@ TESTS = [
     model_view_test("S3 model_view_matrices: the orrery's calls", 1, scene_calls("orrery")),
     mesh_test("S4 sphere_mesh: glutSolidSphere(1, 32, 32)", 6, radius=1.0, slices=32, stacks=32),
     mesh_test("S4 sphere_mesh: a coarse sphere, radius 2, 8 slices, 5 stacks", 5, radius=2.0, slices=8, stacks=5),
-    shader_test("S5 Gouraud: the handout's sphere, 500×500", "S5", 8, SPHERE_SCENE, (500, 500)),
-    shader_test("S5 Gouraud: a 320×240 window", "S5", 4, SPHERE_SCENE, (320, 240)),
+    shader_test("S5 Gouraud: the handout's sphere, 500×500", "S5", 7, SPHERE_SCENE, (500, 500)),
+    shader_test("S5 Gouraud: a 320×240 window", "S5", 3, SPHERE_SCENE, (320, 240)),
     shader_test("S5 Gouraud: a directional and an attenuated point light, an infinite viewer, emission, 240×240", "S5",
                 4, LIGHTS_AND_VIEWER, (240, 240)),
-    shader_test("S6 Phong: the handout's sphere, 500×500", "S6", 8, SPHERE_SCENE, (500, 500)),
+    shader_test("S6 Phong: the handout's sphere, 500×500", "S6", 6, SPHERE_SCENE, (500, 500)),
+    shader_test("S5 Gouraud: shininess 0, the specular colour wherever the light reaches, 200×200", "S5", 2,
+                SHININESS_ZERO, (200, 200)),
     shader_test("S6 Phong: a coarse sphere (8 × 6) close up, under a close light, 256×256", "S6", 3, COARSE_CLOSE,
                 (256, 256)),
+    shader_test("S6 Phong: an infinite viewer (local_viewer false) close up, wide view, 240×240", "S6", 2,
+                CLOSE_INFINITE_VIEWER, (240, 240)),
     reshape_test("S7 reshape: the handout's square window", 3, width=500, height=500),
     reshape_test("S7 reshape: a wide window keeps the sphere round", 3, width=800, height=300),
     reshape_test("S7 reshape: a window minimised to height 0", 2, width=500, height=0),

@@ -142,12 +142,27 @@ def fan(p: dict, rng: np.random.Generator) -> Case:
 
 
 def build_bvh(p: dict, rng: np.random.Generator) -> Case:
-    """As many fresh random boxes, in a region of another size."""
+    """As many fresh random boxes, in a region of another size; or the scene's spheres and polygons scaled and moved."""
+    if "scene" in p:
+        return _moved_scene(p, rng)
     n, extent = len(p["lo"]), rng.uniform(5, 20)
     lo = rng.uniform(-extent, extent, (n, 3))
     hi = lo + rng.uniform(0.1, 2.0, (n, 3))
     return Case({"lo": np.round(lo, 6).tolist(), "hi": np.round(hi, 6).tolist()},
                 f"{n} random boxes 0.1 to 2 wide in a cube of half-side {extent:.3g}")
+
+
+def _moved_scene(p: dict, rng: np.random.Generator) -> Case:
+    """The scene's spheres and polygons scaled by one factor and moved by one offset (the hierarchy's shape kept)."""
+    scene = copy.deepcopy(p["scene"])
+    scale, offset = num(rng.uniform(0.5, 2.0), 3), np.round(rng.uniform(-50, 50, 3), 3)
+    for obj in scene["objects"]:
+        if obj["type"] == "sphere":
+            obj["center"] = np.round(scale * np.asarray(obj["center"], float) + offset, 6).tolist()
+            obj["radius"] = num(scale * obj["radius"], 6)
+        elif obj["type"] == "polygon":
+            obj["vertices"] = np.round(scale * np.asarray(obj["vertices"], float) + offset, 6).tolist()
+    return Case({**p, "scene": scene}, f"the scene scaled by {scale:g} and moved by {offset.tolist()}")
 
 
 def closest_hit_image(p: dict, rng: np.random.Generator) -> Case:
@@ -230,7 +245,10 @@ def reflect(p: dict, rng: np.random.Generator) -> Case:
 def refract(p: dict, rng: np.random.Generator) -> Case:
     """Fresh directions onto a turned surface, another index of the same side (into glass, or out of it with some
     rays past the critical angle)."""
-    n, out_of_glass = len(p["directions"]), p["eta"] > 1
+    n = len(p["directions"])
+    if isinstance(p["eta"], list):
+        return _refract_per_ray(p, rng)
+    out_of_glass = p["eta"] > 1
     turn = rotation(rng)
     while True:
         eta = num(rng.uniform(1.3, 1.8) if out_of_glass else 1 / rng.uniform(1.3, 1.8), 9)
@@ -242,6 +260,17 @@ def refract(p: dict, rng: np.random.Generator) -> Case:
     return Case({"directions": np.round(local @ turn.T, 12).tolist(),
                  "normals": np.round(np.tile(turn[:, 2], (n, 1)), 12).tolist(), "eta": eta},
                 f"{n} fresh directions, η = {eta:.4g}{f', {int(tir.sum())} past the critical angle' if tir.any() else ''}")
+
+
+def _refract_per_ray(p: dict, rng: np.random.Generator) -> Case:
+    """One η per ray: fresh directions onto a turned surface, each ray keeping its kind of η (below 1, 1, above 1)."""
+    eta = np.asarray(p["eta"], float)
+    fresh = np.where(eta > 1, rng.uniform(1.3, 1.8, len(eta)), np.where(eta < 1, 1 / rng.uniform(1.3, 1.8, len(eta)), 1.0))
+    turn = rotation(rng)
+    local = _unit(rng.normal(size=(len(eta), 3)) + [0, 0, -1.5])
+    return Case({"directions": np.round(local @ turn.T, 12).tolist(),
+                 "normals": np.round(np.tile(turn[:, 2], (len(eta), 1)), 12).tolist(), "eta": np.round(fresh, 9).tolist()},
+                f"{len(eta)} fresh directions, one η per ray ({int((eta == 1).sum())} of them 1)")
 
 
 def fresnel(p: dict, rng: np.random.Generator) -> Case:

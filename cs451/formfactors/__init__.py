@@ -22,7 +22,8 @@ Proximity: the hemicube treats the shooter as a point at its centre, an error
 no resolution fixes when another patch is close to it. With ``proximity="contour"``
 the form factor to every close patch j is replaced by the area average over the
 shooter (Gauss points) of the exact point-to-polygon form factor (H6, Lambert's
-contour formula) times the fraction of j that the hemicube found visible. With
+contour formula) times the fraction of j visible from each point: the hemicube's
+where nothing can stand between, else by sight lines (:mod:`.visibility`). With
 ``shooter_split=k`` each row averages k × k hemicubes spread over the shooter.
 
 One module a job: :mod:`.calls` (what the engine asks of a stage-3 implementation),

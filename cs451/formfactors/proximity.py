@@ -18,7 +18,13 @@ Which receivers, and how (chosen by the estimated error, not by a fixed distance
 * close (gap under ``proximity_distance`` times the larger radius): H6, the stage-3 implementation's exact
   point-to-polygon form factor, integrated over the shooter by a graded composite Gauss rule, finer toward j
   (near a shared edge F(p) changes on the scale of the distance to the edge, which a fixed 5 × 5 rule missed
-  by 20% for a 5 × 1 floor beside a 1 × 0.2 wall);
+  by 20% for a 5 × 1 floor beside a 1 × 0.2 wall; :mod:`.shooter_quadrature`). Visibility: where nothing can
+  stand between i and j (:func:`~.visibility.occluders`), the hemicube's own fraction of j seen, as above;
+  where something can, the fraction each quadrature point sees, by sight lines to a grid on j
+  (:class:`~.visibility.Sightlines`), the shooter refined where they disagree. Carrying the centre's view over
+  the whole shooter was wrong under occlusion: the Cornell box's floor (one polygon, partly under the blocks)
+  summed to 0.4687 against an area average of 0.698; with sight lines 0.694, every entry of the box's 16 × 16
+  matrix within 0.006 of ray casting from random points (tests/test_proximity_occlusion.py);
 * in between: the ratio above from a cheap quadrature of the form-factor integral itself (cos·cos/πr²
   between Gauss points of both patches, the kit's own and not H6), applied where it moves the entry by more
   than ``PROXIMITY_ERROR`` (unit squares 0.2 wide five apart: +1.4% before).
@@ -30,18 +36,14 @@ from typing import Any
 import numpy as np
 
 from ..patches import patch_areas
-from .geometry import _sub_quads, clip_polygon_to_plane, gauss_points
+from .geometry import clip_polygon_to_plane, gauss_points
+from .shooter_quadrature import ContourIntegral
+from .visibility import Sightlines, occluders
 
 #: correct an entry where the kernel says the point estimate is off by more than this (relative)
 PROXIMITY_ERROR = 1e-3
 #: beyond this many shooter radii (gap to the receiver's bounding sphere) the point estimate is within ~0.1%
 REACH = 40.0
-#: graded quadrature: split a piece of the shooter while its radius exceeds this fraction of its distance to j
-GRADING = 0.7
-#: graded quadrature: at most this many halvings of a piece
-MAX_DEPTH = 3
-#: Gauss points per side on each leaf of the graded quadrature
-LEAF_GAUSS = 3
 #: a close receiver the hemicube sees within this fraction of wholly (row / H6 at its points) is taken as wholly
 #: visible: its cells cannot tell finer (a 1 × 0.2 wall at grazing angle 2.5 away spans five rows and reads 1.01)
 VISIBLE_SNAP = 0.02
@@ -74,61 +76,13 @@ def kernel(points: np.ndarray, normal: np.ndarray, weights: np.ndarray, receiver
     return weights @ f
 
 
-def distance_to_polygon(point: np.ndarray, polygon: np.ndarray, normal: np.ndarray) -> float:
-    """Distance from a point to a planar convex polygon (its plane's ``normal``): to the plane when the point
-    projects inside, else to the nearest edge."""
-    height = float((point - polygon[0]) @ normal)
-    foot = point - height * normal
-    edges = np.roll(polygon, -1, axis=0) - polygon
-    inside = np.cross(edges, foot - polygon) @ normal
-    if (inside >= -1e-12).all() or (inside <= 1e-12).all():
-        return abs(height)
-    t = np.clip(np.einsum("ij,ij->i", point - polygon, edges) / np.maximum((edges * edges).sum(axis=1), 1e-300), 0, 1)
-    return float(np.linalg.norm(polygon + t[:, None] * edges - point, axis=1).min())
-
-
-class GradedContour:
-    """∫ over the shooter of H6's F(p → polygon) dA, by Gauss points on pieces graded toward the polygon."""
-
-    def __init__(self, calls: Any, normal: np.ndarray, polygon: np.ndarray, receiver_normal: np.ndarray):
-        self.calls, self.normal, self.polygon, self.receiver_normal = calls, normal, polygon, receiver_normal
-        self.evaluations = 0
-
-    def at(self, point: np.ndarray) -> float:
-        self.evaluations += 1
-        return float(self.calls.contour(point, self.normal, self.polygon))
-
-    def integral(self, quad: np.ndarray) -> float:
-        """The integral over a quad: first cut into near-square pieces (a 5 × 1 floor into five), then graded."""
-        u = max(np.linalg.norm(quad[1] - quad[0]), np.linalg.norm(quad[2] - quad[3]))
-        v = max(np.linalg.norm(quad[3] - quad[0]), np.linalg.norm(quad[2] - quad[1]))
-        ku, kv = (int(min(8, max(1, round(x / max(min(u, v), 1e-300))))) for x in (u, v))
-        return sum(self._piece(piece, 0) for piece in _grid(quad, ku, kv))
-
-    def _piece(self, quad: np.ndarray, depth: int) -> float:
-        centre = quad.mean(axis=0)
-        radius = float(np.linalg.norm(quad - centre, axis=1).max())
-        if depth < MAX_DEPTH and radius > GRADING * distance_to_polygon(centre, self.polygon, self.receiver_normal):
-            return sum(self._piece(child, depth + 1) for child in _sub_quads(quad, 2))
-        points, weights = gauss_points(quad, LEAF_GAUSS)
-        return float(sum(w * self.at(p) for p, w in zip(points, weights)))
-
-
-def _grid(quad: np.ndarray, ku: int, kv: int) -> np.ndarray:
-    """The ku × kv bilinear cells of a quad (ku along its first edge)."""
-    s, t = np.linspace(0.0, 1.0, ku + 1), np.linspace(0.0, 1.0, kv + 1)
-    S, T = (g[:, :, None] for g in np.meshgrid(s, t, indexing="ij"))
-    a, b, c, d = quad
-    grid = (1 - S) * (1 - T) * a + S * (1 - T) * b + S * T * c + (1 - S) * T * d
-    return np.stack([grid[:-1, :-1], grid[1:, :-1], grid[1:, 1:], grid[:-1, 1:]], axis=2).reshape(-1, 4, 3)
-
-
 def fix_row(calls: Any, quads: np.ndarray, normals: np.ndarray, centers: np.ndarray, radii: np.ndarray, i: int,
             row: np.ndarray, stands: tuple[np.ndarray, np.ndarray], proximity_distance: float,
             counters: dict[str, int]) -> np.ndarray:
     """Row ``row`` of patch i, measured from the points ``stands`` = (points, weights summing to 1), with each
-    entry corrected as the module says. Counts ``proximity_pairs`` (H6), ``proximity_kernel_pairs`` and
-    ``proximity_evaluations`` (H6 calls)."""
+    entry corrected as the module says. Counts ``proximity_pairs`` (H6), ``proximity_kernel_pairs``,
+    ``proximity_evaluations`` (H6 calls), ``proximity_occluded_pairs`` (close pairs with something between)
+    and ``proximity_rays`` (their sight lines)."""
     c, n, r_i = centers[i], normals[i], radii[i]
     points, weights = stands
     gap = np.linalg.norm(centers - c, axis=1) - radii
@@ -149,21 +103,27 @@ def fix_row(calls: Any, quads: np.ndarray, normals: np.ndarray, centers: np.ndar
         out[J[moved]] = row[J[moved]] * ratio[moved]
         counters["proximity_kernel_pairs"] = counters.get("proximity_kernel_pairs", 0) + int(moved.sum())
     area = float(patch_areas(quads[i:i + 1])[0])
+    size = float(np.ptp(quads.reshape(-1, 3), axis=0).max())
     for j in np.flatnonzero(close):
         poly = clip_polygon_to_plane(quads[j], c, n)
         if len(poly) < 3:
             continue
-        contour = GradedContour(calls, n, poly, normals[j])
-        measured = float(sum(w * contour.at(p) for p, w in zip(points, weights)))
-        if measured > 1e-12:
-            if row[j] <= 0.0:
+        blockers = occluders(quads, normals, i, j, size)
+        sightlines = Sightlines(quads[blockers], quads[j], normals[j], n, c) if len(blockers) else None
+        contour = ContourIntegral(calls, n, poly, normals[j], quads[j][0], sightlines)
+        if sightlines is None:                 # nothing between: the hemicube's cells tell the visible fraction
+            reach = float(weights @ (contour.at(points) * contour.seen(points)))   # 0 where they stood behind j
+            if reach > 1e-12 and row[j] <= 0.0:
                 continue                       # seen from where the hemicubes stood, and hidden: stays 0
-            scale = row[j] / measured          # the hemicube's visibility, carried over
+            scale = row[j] / reach if reach > 1e-12 else 1.0
             if abs(scale - 1.0) <= VISIBLE_SNAP:
                 scale = 1.0                    # within what its cells can tell from wholly visible
         else:
-            scale = 1.0                        # edge-on from the hemicubes' points: they cannot tell; assume unoccluded
+            scale = 1.0                        # the sight lines tell it, point by point
         out[j] = scale * contour.integral(quads[i]) / area
         counters["proximity_pairs"] = counters.get("proximity_pairs", 0) + 1
         counters["proximity_evaluations"] = counters.get("proximity_evaluations", 0) + contour.evaluations
+        if sightlines is not None:
+            counters["proximity_occluded_pairs"] = counters.get("proximity_occluded_pairs", 0) + 1
+            counters["proximity_rays"] = counters.get("proximity_rays", 0) + sightlines.rays
     return out

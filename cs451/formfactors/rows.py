@@ -6,7 +6,7 @@ over a hemicube the atlas renders. Proximity: the hemicube treats the shooter as
 point at its centre, an error no resolution fixes when another patch is close to it;
 ``proximity="contour"`` replaces the form factor to every close patch by the area
 average over the shooter (Gauss points) of the exact point-to-polygon form factor
-(H6) times the fraction of it the hemicube found visible; ``shooter_split=k``
+(H6) times the fraction of it visible from each point (:mod:`.proximity`); ``shooter_split=k``
 averages k × k hemicubes spread over the shooter instead.
 """
 from __future__ import annotations

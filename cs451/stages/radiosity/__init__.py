@@ -300,6 +300,7 @@ def probe_progressive(impl: Any, tolerance: float, max_shots: int, overshoot: fl
     sol = solve_progressive(impl, rows, a, rho, E, tolerance, max_shots, overshoot, use_ambient=False)
     return {"radiosity": sol.radiosity, "unshot": sol.unshot, "order": np.asarray(sol.order, dtype=np.int64),
             "rows_computed": np.asarray(rows.counters["rows_computed"]),
+            "rows_requested": np.asarray(rows.counters["rows_computed"] + rows.counters["rows_cached_hits"]),
             "direct": solve_direct(shooting_matrix(F_, a), rho, E),
             "areas": a, "emission": E, "reflectance": rho}
 
