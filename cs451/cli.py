@@ -339,8 +339,9 @@ def build_parser() -> argparse.ArgumentParser:
     rl.set_defaults(func=_cmd_release)
 
     b = sub.add_parser("bench", help="time-against-error benchmarks", description="Run a stage's benchmark; prints a table and writes JSON.")
-    b.add_argument("stage", choices=stages + ["autograder", "tolerance", "fair_share"],
+    b.add_argument("stage", choices=stages + ["autograder", "tolerance", "fair_share", "mutation"],
                    help="a stage; 'autograder' (grading time and memory per stage, against Gradescope's limits); "
+                        "'mutation' (mistakes planted in the reference's task regions: which the tests catch); "
                         "'tolerance' (image tests' spread across rasterisers and thread counts); 'fair_share' (an "
                         "honest student's roster grading beside a CPU burner, with and without the CPU share)")
     b.add_argument("-o", "--output", default="bench-results", help="folder for the JSON and plots (default: bench-results)")

@@ -121,8 +121,8 @@ def progressive_refinement(row, areas, reflectance, emission, tolerance, max_sho
 
 
 def radiosity_oracle(root: Path, pass_hidden_shot: bool, pass_hidden_grid: bool) -> Path:
-    """A radiosity submission whose hidden R2.3 (a shot) and R1.5 (a grid) pass or fail as asked; nothing else differs."""
-    shot, grid = _params("radiosity", "R2.3"), _params("radiosity", "R1.5")
+    """A radiosity submission whose hidden R2.3 (a shot) and R1.6 (a grid at 0.7 m) pass or fail as asked; nothing else differs."""
+    shot, grid = _params("radiosity", "R2.3"), _params("radiosity", "R1.6")
     return _package(root, "radiosity", RADIOSITY_ORACLE.format(
         shot=json.dumps({"i": shot["i"], "areas": shot["areas"]}),
         grid=json.dumps({"max_edge": grid["max_edge"], "quads": grid["quads"]}),
@@ -131,7 +131,7 @@ def radiosity_oracle(root: Path, pass_hidden_shot: bool, pass_hidden_grid: bool)
 
 def test01_a_hidden_result_changes_nothing_a_student_sees_in_any_local_output():
     """R2.3 failing on purpose once added "R2 shoot() loses points in its own tests" to every visible R3 test and
-    moved the top-level score 15 -> 12.5; R1.5 passing once gave visible edge case R1.3 its point."""
+    moved the top-level score 15 -> 12.5; the hidden grid case passing once gave visible edge case R1.3 its point."""
     top = world_readable_dir("cs451-oracle-")
     try:
         graded = []
@@ -141,7 +141,7 @@ def test01_a_hidden_result_changes_nothing_a_student_sees_in_any_local_output():
                                 tasks=["R1", "R2", "R3"]))
         a, b = graded
         hidden = {r.test.number: (ra.score, r.score) for ra, r in zip(a.results, b.results) if r.test.hidden}
-        assert hidden["R2.3"][0] > hidden["R2.3"][1] and hidden["R1.5"][0] < hidden["R1.5"][1], hidden
+        assert hidden["R2.3"][0] > hidden["R2.3"][1] and hidden["R1.6"][0] < hidden["R1.6"][1], hidden
         assert total_score(to_gradescope(a)) != total_score(to_gradescope(b))     # the grade itself does differ
         assert seen_before_publication(to_gradescope(a)) == seen_before_publication(to_gradescope(b))
         assert render_report(a, show_hidden=False) == render_report(b, show_hidden=False)

@@ -66,10 +66,10 @@ def test_the_handout_diagrams_are_in_step_ship_and_a_changed_one_is_drift(tmp_pa
 
 def test_a_figure_drawn_with_render_figure_matches_it_and_the_starter_says_what_is_missing(tmp_path):
     """The handout's recipe: `cs451 render --figure` draws the figure's own test (S5.3's lights and S6.2's coarse
-    sphere are in no bundled scene; R5.4's patch size and resolution are the test's), and compare judges it."""
+    sphere are in no bundled scene; R5.6's patch size and resolution are the test's), and compare judges it."""
     import subprocess
     import sys
-    for number, handout in (("S5.3", "01-sphere"), ("S6.2", "01-sphere"), ("R5.4", "04-radiosity")):
+    for number, handout in (("S5.3", "01-sphere"), ("S6.2", "01-sphere"), ("R5.6", "04-radiosity")):
         mine = tmp_path / f"{number}.png"
         cs451 = [sys.executable, "-m", "cs451"]
         done = subprocess.run(cs451 + ["render", "--figure", number, "-o", str(mine), "--impl", "reference"],

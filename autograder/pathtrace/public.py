@@ -45,10 +45,10 @@ def _unit(v) -> list:
     return (v / np.linalg.norm(v, axis=-1, keepdims=True)).tolist()
 
 
-def hemisphere_test(name, points, normals, samples, seed) -> Test:
+def hemisphere_test(name, points, normals, samples, seed, near_poles: bool = False) -> Test:
     return Test(name, "P1", points, "cosine_sample", {"normals": normals, "samples": samples, "seed": seed},
                 check(checks.directions_unit), f"unit within {TOL.UNIT}, about the normal, repeatable", expected="none",
-                timeout=QUICK, vary=variant(variants.normals), edge_case=True)   # the normal itself passes: counts beside P1's others
+                timeout=QUICK, vary=variant(variants.normals, near_poles=near_poles), edge_case=True)   # the normal itself passes: counts beside P1's others
 
 
 def cosine_test(name, points, normals, samples, seed) -> Test:
@@ -111,7 +111,9 @@ NORMALS = _unit([[0, 0, 1], [0, 0, -1], [1, 0, 0], [0, -1, 0], [0.3, -0.5, 0.8],
 TESTS = [
     hemisphere_test("P1 cosine_sample: unit directions about six normals, repeatable", 4, NORMALS, 500, 1),
     cosine_test("P1 cosine_sample: cos θ/π about +z", 8, [[0, 0, 1]], 40_000, 2),
-    cosine_test("P1 cosine_sample: cos θ/π about tilted and downward normals", 8, NORMALS[1:], 20_000, 3),
+    cosine_test("P1 cosine_sample: cos θ/π about tilted and downward normals", 6, NORMALS[1:], 20_000, 3),
+    hemisphere_test("P1 cosine_sample: unit directions about normals a hair (ten millionths of a radian) off +z and -z", 2,
+                    _unit([[1e-7, 3e-8, 1.0], [-2e-7, 1e-7, -1.0]]), 500, 8, near_poles=True),
     direct_test("P2 direct_light: each sample by its formula, some behind a blocker", 8, open_scene(), FLOOR_POINTS,
                 UP, GREY, 4),
     shadow_count_test("P2 direct_light: a shadow ray only where the surface faces the light", 4, open_scene(),

@@ -18,8 +18,16 @@ def _seed(rng: np.random.Generator) -> int:
     return int(rng.integers(1, 2 ** 31))
 
 
-def normals(p: dict, rng: np.random.Generator) -> Case:
-    """As many fresh unit normals (one of them straight down), a fresh seed."""
+def normals(p: dict, rng: np.random.Generator, near_poles: bool = False) -> Case:
+    """As many fresh unit normals (one of them straight down), a fresh seed; with ``near_poles``, normals within
+    1e-7 to 1e-6 of +z and -z (n_z 1e-15 to 1e-12 from ±1, kept by the rounding), where a frame built about
+    the normal loses its precision if it divides by 1 - |n_z|."""
+    if near_poles:
+        k = len(p["normals"])
+        tilt = rng.uniform(0.5, 1, (k, 2)) * rng.choice([-1, 1], (k, 2)) * 10.0 ** rng.uniform(-7, -6, (k, 1))
+        n = _unit(np.c_[tilt, np.where(np.arange(k) % 2 == 0, 1.0, -1.0)])
+        return Case({**p, "normals": np.round(n, 15).tolist(), "seed": _seed(rng)},
+                    f"{k} fresh normals within 1e-6 of +z and -z")
     n = _unit(rng.normal(size=(len(p["normals"]), 3)))
     n[0] = [0.0, 0.0, -1.0] if len(n) > 1 else n[0]
     return Case({**p, "normals": np.round(n, 12).tolist(), "seed": _seed(rng)}, f"{len(n)} fresh normals")

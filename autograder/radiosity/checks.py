@@ -86,7 +86,7 @@ def loop_matches(out, expected, p) -> Verdict:
     if not (np.allclose(B, expected["radiosity"], rtol=TOL.LOOP_RTOL, atol=TOL.FLOAT64_ATOL)
             and np.allclose(dB, expected["unshot"], rtol=TOL.LOOP_RTOL, atol=TOL.FLOAT64_ATOL)):
         return Verdict(0.5, "the order of shots is right but B or ΔB are not")
-    fetched = _rows_fetched(out, len(order))
+    fetched = _rows_fetched(out, len(order)) or _on_shot_reported(out, order, B)
     if fetched:
         return Verdict(0.5, f"B and ΔB are right, but {fetched}")
     return Verdict(1.0, f"{len(order)} shots in the right order with the right B and ΔB")
@@ -98,6 +98,20 @@ def _rows_fetched(out, shots: int) -> str | None:
     if asked != shots:
         return (f"row() was called {asked} times for {shots} shots (ask for a patch's row when it shoots, once, "
                 f"and stop before asking for the next)")
+    return None
+
+
+def _on_shot_reported(out, order: list[int], radiosity: np.ndarray) -> str | None:
+    """``on_shot(shots, i, radiosity, unshot)`` after every shot, as the contract says (the demo draws with it)."""
+    calls = output(out, "on_shot_calls", (None, 2), "on_shot_calls").astype(np.int64).tolist()
+    want = [[k, i] for k, i in enumerate(order, 1)]
+    if calls != want:
+        return (f"on_shot was called {len(calls)} times for {len(order)} shots"
+                + (f" (first calls as (shots, i): {calls[:3]}, expected {want[:3]})" if calls else "")
+                + "; call on_shot(shots, i, radiosity, unshot) after every shot")
+    last = output(out, "on_shot_last", radiosity.shape, "on_shot_last")
+    if order and not np.array_equal(last, radiosity):
+        return "the radiosity on_shot saw after the last shot is not the one returned (pass the state after the shot)"
     return None
 
 

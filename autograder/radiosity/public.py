@@ -144,7 +144,8 @@ VERTEX_CHECKS = all_of([("corners", sub(checks.vertex_corners)), ("colours", sub
 
 
 def vertex_test(name, points, quads, parent, radiosity, kind="triangle") -> Test:
-    """``kind``: "grid" (walls of the furnace) or "triangle" (a triangle beside a quad), for the fresh case."""
+    """``kind``: "grid" (walls of the furnace), "triangle" (a triangle beside a quad), "fan" (a fanned polygon) or
+    "noisy" (corners apart by rounding noise), for the fresh case."""
     return Test(name, "R5", points, "vertex_colors", {"quads": quads, "parent": parent, "radiosity": radiosity},
                 VERTEX_CHECKS, f"colours within {TOL.FLOAT64_RTOL}", expected="none", truth=truth(truths.vertex_colours), timeout=QUICK,
                 vary=variant(variants.vertex_colors, kind=kind))
@@ -174,6 +175,37 @@ def fan_patches(sides: int, radius: float, turn: float = 0.0) -> tuple[list, lis
     v = np.column_stack([radius * np.cos(angles), radius * np.sin(angles), np.zeros(sides)])
     quads = [[v[0], v[k], v[k + 1], v[k + 1]] for k in range(1, sides - 1)]
     return lists(np.array(quads)), [0] * len(quads)
+
+
+def noisy_grid(size: float, cuts: int, rng: np.random.Generator) -> tuple[list, list, list]:
+    """One square polygon ``size`` wide cut into cuts × cuts patches whose shared corners differ by rounding noise
+    (about 1e-13 of the size, as corners computed from different patches do): one vertex each by the contract's
+    1e-9·S. Drawn again until no shared corner's copies straddle a cell of the 1e-9·S grid the handout suggests
+    snapping to, so that the snapping it suggests gives the contract's answer."""
+    t = np.linspace(0.0, size, cuts + 1)
+    patches = [[[t[a], t[b], 0.0], [t[a + 1], t[b], 0.0], [t[a + 1], t[b + 1], 0.0], [t[a], t[b + 1], 0.0]]
+               for a in range(cuts) for b in range(cuts)]
+    clean = np.array(patches)
+    while True:
+        noisy = clean + rng.normal(scale=1e-13 * size, size=clean.shape) * [1, 1, 0]
+        cells = np.round((noisy - noisy.reshape(-1, 3).min(axis=0)) / (1e-9 * size))
+        same = np.all(np.abs(clean[:, :, None, None] - clean[None, None]) == 0, axis=-1)   # (m, 4, m, 4)
+        if np.all(~same | np.all(cells[:, :, None, None] == cells[None, None], axis=-1)):
+            break
+    colours = rng.uniform(0, 1, (len(patches), 3))
+    return lists(noisy), [0] * len(patches), lists(colours)
+
+
+def far_grid(size: float, cuts: int, offset: float, axis: int, rng: np.random.Generator) -> tuple[list, list, list]:
+    """A square ``size`` wide cut into cuts × cuts patches, ``offset`` from the origin along ``axis``: which corners
+    are one vertex must not depend on where the model sits (keys taken from the coordinates themselves, not from
+    the model's own corner, pass 2^63 there; a scale taken across a point's coordinates is the offset)."""
+    t = np.linspace(0.0, size, cuts + 1)
+    flat = np.array([[[t[a], t[b], 0.0], [t[a + 1], t[b], 0.0], [t[a + 1], t[b + 1], 0.0], [t[a], t[b + 1], 0.0]]
+                     for a in range(cuts) for b in range(cuts)])
+    flat = np.roll(flat, axis, axis=-1)      # the square in the plane of the two other axes, shifted along ``axis``
+    flat[..., axis] += offset
+    return lists(flat), [0] * len(flat), lists(rng.uniform(0, 1, (len(flat), 3)))
 
 
 def _triangle_beside_quad() -> tuple[list, list, list]:
@@ -212,8 +244,12 @@ TESTS = [
                  [[0.0, 0.0, 0.0], [3.0, 1.2, 0.36], [1.6, 0.2, 0.24]]),
     ambient_test("R4 ambient_term: after an overshot shot (a negative ΔB counts with its sign)", 2, HAND["areas"],
                  HAND["reflectance"], OVERSHOT),
-    vertex_test("R5 vertex_colors: three walls of the furnace, 3 × 3 patches each", 4, *GRID, "grid"),
+    vertex_test("R5 vertex_colors: three walls of the furnace, 3 × 3 patches each", 2, *GRID, "grid"),
+    vertex_test("R5 vertex_colors: a square 1 wide cut 2 × 2, 2^34 from the origin along x", 1,
+                *far_grid(1.0, 2, 2.0 ** 34, 0, np.random.default_rng(14)), "far"),
     vertex_test("R5 vertex_colors: a triangle (repeated corner) beside a quad", 1, *_triangle_beside_quad(), "triangle"),
+    vertex_test("R5 vertex_colors: a floor 1,000 wide cut 3 × 3, shared corners apart by rounding noise", 1,
+                *noisy_grid(1000.0, 3, np.random.default_rng(13)), "noisy"),
     vertex_test("R5 vertex_colors: a hexagon fanned into triangles, each repeating a corner the next one shares", 3,
                 *fan_patches(6, 1.0), lists(np.random.default_rng(9).uniform(0, 1, (4, 3))), "fan"),
     render_test("R5 render: the Cornell box", 8, CORNELL, (128, 128), 100.0),

@@ -147,6 +147,19 @@ def vertex_colors(p: dict, rng: np.random.Generator, kind: str) -> Case:
         from autograder.radiosity.public import scene_quads
         polygons, factors = _stretch(scene_quads("furnace", 3), rng)
         edge = num(rng.uniform(0.26, 0.5), 3)
+    elif kind == "far":
+        from autograder.radiosity.public import far_grid
+        size, cuts, axis = num(rng.uniform(0.5, 4.0), 3), int(rng.integers(2, 5)), int(rng.integers(0, 3))
+        offset = float(rng.choice([-1.0, 1.0]) * 2.0 ** int(rng.integers(34, 40)))
+        quads, parent, radiosity = far_grid(size, cuts, offset, axis, rng)
+        return Case({"quads": quads, "parent": parent, "radiosity": radiosity},
+                    f"a square {size:g} wide cut {cuts} × {cuts}, {offset:g} from the origin along {'xyz'[axis]}")
+    elif kind == "noisy":
+        from autograder.radiosity.public import noisy_grid
+        size, cuts = num(rng.uniform(100.0, 5000.0), 3), int(rng.integers(2, 5))
+        quads, parent, radiosity = noisy_grid(size, cuts, rng)
+        return Case({"quads": quads, "parent": parent, "radiosity": radiosity},
+                    f"a square {size:g} wide cut {cuts} × {cuts}, shared corners apart by rounding noise")
     elif kind == "fan":
         from autograder.radiosity.public import fan_patches
         sides, radius, turn = int(rng.integers(5, 9)), num(rng.uniform(0.5, 3.0), 3), num(rng.uniform(0, 360), 1)

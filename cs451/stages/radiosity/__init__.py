@@ -297,8 +297,16 @@ def probe_progressive(impl: Any, tolerance: float, max_shots: int, overshoot: fl
     """The shooting loop on a given system (small hand-worked scenes in the parameters, or a scene's trusted arrays)."""
     F_, a, rho, E = _system({"F": F, "areas": areas, "reflectance": reflectance, "emission": emission}, given)
     rows = MatrixRows(F_)
-    sol = solve_progressive(impl, rows, a, rho, E, tolerance, max_shots, overshoot, use_ambient=False)
+    calls_seen: list[tuple[int, int]] = []
+    last_seen: list[np.ndarray] = [np.full_like(E, np.nan)]
+
+    def on_shot(shots: int, i: int, radiosity: np.ndarray, unshot: np.ndarray) -> None:
+        calls_seen.append((int(shots), int(i)))
+        last_seen[0] = np.array(radiosity, dtype=np.float64)
+
+    sol = solve_progressive(impl, rows, a, rho, E, tolerance, max_shots, overshoot, use_ambient=False, on_shot=on_shot)
     return {"radiosity": sol.radiosity, "unshot": sol.unshot, "order": np.asarray(sol.order, dtype=np.int64),
+            "on_shot_calls": np.asarray(calls_seen, dtype=np.int64).reshape(-1, 2), "on_shot_last": last_seen[0],
             "rows_computed": np.asarray(rows.counters["rows_computed"]),
             "rows_requested": np.asarray(rows.counters["rows_computed"] + rows.counters["rows_cached_hits"]),
             "direct": solve_direct(shooting_matrix(F_, a), rho, E),

@@ -1,0 +1,60 @@
+"""The mutation bench's planting (bench/mutation.py): changes only inside task regions, at the right place, and
+every mutant still a program; a planted mistake graded on its own task loses points."""
+from __future__ import annotations
+
+import ast
+
+from bench.mutation import apply, mutants_of, stage_mutants, task_score
+
+SOURCE = '''import numpy as np
+
+LIMIT = 3   # outside every region: never mutated
+
+
+def f(x, y):
+    # BEGIN SOLUTION T1: a comparison, an operator, a constant, a sign
+    if x < y:
+        return -x + 2 * y
+    total = 0
+    total += x
+    return total
+    # END SOLUTION
+
+
+def g(x):
+    # BEGIN SOLUTION
+    return x + 1
+    # END SOLUTION
+'''
+
+
+def test01_only_task_regions_and_each_kind_once_where_expected():
+    mutants = mutants_of(SOURCE, "toy", "toy.py")
+    assert {m.task for m in mutants} == {"T1"}
+    assert all(8 <= m.line <= 12 for m in mutants), [m.line for m in mutants]
+    kinds = {(m.kind, m.before, m.after) for m in mutants}
+    assert ("comparison", "<", "<=") in kinds
+    assert ("operator", "+", "-") in kinds and ("operator", "*", "/") in kinds
+    assert ("constant", "2", "3") in kinds and ("constant", "0", "1") in kinds
+    assert ("sign dropped", "-", "") in kinds
+    assert ("term dropped", " + 2 * y", "") in kinds
+    assert ("statement dropped", "total += x", "pass") in kinds
+
+
+def test02_every_mutant_is_a_program_that_differs_from_the_source():
+    for m in mutants_of(SOURCE, "toy", "toy.py"):
+        text = SOURCE[:m.start] + m.after + SOURCE[m.end:]
+        assert text != SOURCE
+        ast.parse(text)
+
+
+def test03_the_reference_has_mutants_in_every_task_with_code():
+    tasks = {m.task for m in stage_mutants("radiosity")}
+    assert tasks == {"R1", "R2", "R3", "R4", "R5"}
+
+
+def test04_a_planted_mistake_loses_its_tasks_points(tmp_path):
+    """R2 with the area ratio inverted (A_i / A_j becomes A_i * A_j) scores below full marks on R2."""
+    mutant = next(m for m in stage_mutants("radiosity") if m.task == "R2" and m.kind == "operator" and m.before == "/")
+    got, full = task_score("radiosity", apply(mutant, tmp_path), "R2")
+    assert full > 0 and got < full
