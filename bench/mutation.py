@@ -7,7 +7,8 @@ makes: a comparison flipped (< and <=, == and !=), an operator swapped (+ and -,
 (stage 1's shaders) the same, token by token. A mutant is killed when its task scores below full marks. One
 that survives is either a gap in the tests or equivalent (no program input can tell it from the reference):
 ``bench/mutation_equivalent.json`` lists those, each with its reason. The score per stage is killed /
-(mutants − equivalent). ``--quick`` grades a seeded sample of each stage's mutants.
+(mutants − equivalent − not graded); a mutant the grader wrote no results for (a fault of the kit or the machine,
+not a verdict) is listed as not graded, never as killed. ``--quick`` grades a seeded sample of each stage's mutants.
 
 Changes are spliced into the source text at the AST's positions, so comments and regions stay as they are.
 """
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import ast
 import json
+import os
 import random
 import re
 import shutil
@@ -29,8 +31,10 @@ from cs451 import KIT_ROOT
 
 REGION = re.compile(r"#\s*BEGIN SOLUTION\s+([A-Z]\d+)?")
 SWAPS = {ast.Lt: "<=", ast.LtE: "<", ast.Gt: ">=", ast.GtE: ">", ast.Eq: "!=", ast.NotEq: "==",
-         ast.Add: "-", ast.Sub: "+", ast.Mult: "/", ast.Div: "*", ast.And: "or", ast.Or: "and"}
-SYMBOL = {ast.Lt: "<", ast.LtE: "<=", ast.Gt: ">", ast.GtE: ">=", ast.Eq: "==", ast.NotEq: "!=",
+         ast.Add: "-", ast.Sub: "+", ast.Mult: "/", ast.Div: "*", ast.And: "or", ast.Or: "and",
+         ast.In: "not in", ast.NotIn: "in"}
+SYMBOL = {ast.Lt: "<", ast.LtE: "<=", ast.Gt: ">", ast.GtE: ">=", ast.Eq: "==", ast.NotEq: "!=", ast.In: "in",
+          ast.NotIn: "not in",
           ast.Add: "+", ast.Sub: "-", ast.Mult: "*", ast.Div: "/", ast.And: "and", ast.Or: "or"}
 GLSL_SWAPS = [(" + ", " - "), (" - ", " + "), (" * ", " / "), (" / ", " * "), (" < ", " <= "), (" > ", " >= "),
               ("max(", "min("), ("min(", "max("), ("0.0", "1.0"), ("1.0", "0.0")]
@@ -128,7 +132,9 @@ def mutants_of(source: str, stage: str, file: str) -> list[Mutant]:
             for old, new in GLSL_SWAPS:
                 for m in re.finditer(re.escape(old), text):
                     add(node, "glsl", base + m.start(), base + m.end(), new)
-        elif isinstance(node, (ast.Expr, ast.AugAssign)) and not isinstance(getattr(node, "value", None), ast.Constant):
+        elif (isinstance(node, (ast.Expr, ast.AugAssign)) and not isinstance(getattr(node, "value", None), ast.Constant)
+              or isinstance(node, ast.Assign) and all(isinstance(t, (ast.Subscript, ast.Attribute)) for t in node.targets)):
+            # a call, an update, or a store into an array or a dict left out (a plain name assigned is not: NameError)
             add(node, "statement dropped", at(node.lineno, node.col_offset), at(node.end_lineno, node.end_col_offset),
                 "pass")
     return out
@@ -149,14 +155,20 @@ def apply(mutant: Mutant, into: Path) -> Path:
     return into
 
 
+class GraderFailed(RuntimeError):
+    """The grader wrote no results: a fault of the kit (or of the machine), never a verdict on the mutant."""
+
+
 def task_score(stage: str, submission: Path, task: str) -> tuple[float, float]:
-    """(points, out of) for one task's tests, public and hidden, graded as an instructor grades (sandboxed)."""
+    """(points, out of) for one task's tests, public and hidden, graded as an instructor grades (sandboxed), by the
+    copy of the kit this module belongs to (so a snapshot of the kit can be measured while its checkout changes)."""
     with tempfile.TemporaryDirectory() as tmp:
         results = Path(tmp) / "results.json"
-        subprocess.run([str(Path(sys.executable).with_name("cs451")), "grade", stage, "--submission", str(submission), "--tasks", task,
-                        "--results", str(results)], capture_output=True, text=True, timeout=900)
+        done = subprocess.run([sys.executable, "-m", "cs451", "grade", stage, "--submission", str(submission),
+                               "--tasks", task, "--results", str(results)], capture_output=True, text=True,
+                              timeout=900, cwd=KIT_ROOT, env={**os.environ, "PYTHONPATH": str(KIT_ROOT)})
         if not results.exists():
-            return 0.0, 1.0       # the grader refused it outright (it does not import): killed
+            raise GraderFailed(f"exit {done.returncode}: {(done.stderr or done.stdout).strip()[-300:]}")
         data = json.loads(results.read_text())
     tests = data.get("tests", [])
     return sum(t.get("score", 0) for t in tests), sum(t.get("max_score", 0) for t in tests)
@@ -172,16 +184,20 @@ def run(stage: str, sample: int | None = None, seed: int = 0, progress=print) ->
     for k, m in enumerate(mutants, 1):
         t0 = time.perf_counter()
         with tempfile.TemporaryDirectory() as tmp:
-            got, full = task_score(stage, apply(m, Path(tmp)), m.task)
-        killed = got < full - 1e-9
-        rows.append({**asdict(m), "key": m.key, "points": got, "out_of": full, "killed": killed,
+            try:
+                got, full = task_score(stage, apply(m, Path(tmp)), m.task)
+                killed, error = got < full - 1e-9, None
+            except (GraderFailed, subprocess.TimeoutExpired) as err:
+                got, full, killed, error = 0.0, 0.0, False, str(err)
+        rows.append({**asdict(m), "key": m.key, "points": got, "out_of": full, "killed": killed, "error": error,
                      "equivalent": equivalent.get(m.key), "seconds": time.perf_counter() - t0})
-        progress(f"  {stage} {k}/{len(mutants)} {m.task} {m.file}:{m.line} {m.kind} {m.before!r}->{m.after!r}: "
-                 f"{'killed' if killed else 'SURVIVED'} ({got:g}/{full:g})")
-    counted = [r for r in rows if not (r["equivalent"] and not r["killed"])]
+        verdict = f"ERROR ({error})" if error else f"{'killed' if killed else 'SURVIVED'} ({got:g}/{full:g})"
+        progress(f"  {stage} {k}/{len(mutants)} {m.task} {m.file}:{m.line} {m.kind} {m.before!r}->{m.after!r}: {verdict}")
+    graded = [r for r in rows if not r["error"]]
+    counted = [r for r in graded if not (r["equivalent"] and not r["killed"])]
     killed = sum(r["killed"] for r in counted)
-    return {"stage": stage, "mutants": len(rows), "killed": killed,
-            "equivalent": sum(1 for r in rows if r["equivalent"] and not r["killed"]),
+    return {"stage": stage, "mutants": len(rows), "killed": killed, "errors": len(rows) - len(graded),
+            "equivalent": sum(1 for r in graded if r["equivalent"] and not r["killed"]),
             "score": killed / len(counted) if counted else 1.0, "rows": rows}
 
 
@@ -190,12 +206,15 @@ def main(output: Path, quick: bool = False, stages: list[str] | None = None) -> 
     output = Path(output)
     output.mkdir(parents=True, exist_ok=True)
     reports = [run(s, sample=12 if quick else None) for s in (stages or stage_names())]
-    print(f"\n{'stage':10s} {'mutants':>8s} {'killed':>7s} {'equiv.':>7s} {'score':>7s}")
+    print(f"\n{'stage':10s} {'mutants':>8s} {'killed':>7s} {'equiv.':>7s} {'errors':>7s} {'score':>7s}")
     for r in reports:
-        print(f"{r['stage']:10s} {r['mutants']:8d} {r['killed']:7d} {r['equivalent']:7d} {r['score']:7.1%}")
+        print(f"{r['stage']:10s} {r['mutants']:8d} {r['killed']:7d} {r['equivalent']:7d} {r['errors']:7d} "
+              f"{r['score']:7.1%}")
     for r in reports:
         for row in r["rows"]:
-            if not row["killed"] and not row["equivalent"]:
+            if row["error"]:
+                print(f"  not graded: {row['key']} (task {row['task']}): {row['error']}")
+            elif not row["killed"] and not row["equivalent"]:
                 print(f"  survived: {row['key']} (task {row['task']})")
     (output / "mutation.json").write_text(json.dumps(reports, indent=1))
     print(f"\nwrote {output / 'mutation.json'}")

@@ -128,12 +128,14 @@ class RowsAhead:
 
 def solve_progressive(calls: Any, rows: Any, areas: np.ndarray, reflectance: np.ndarray, emission: np.ndarray,
                       tolerance: float = 1e-3, max_shots: int = 0, overshoot: float = 1.0, use_ambient: bool = True,
-                      on_shot: Callable | None = None, rows_ahead: int = 0) -> Solution:
+                      on_shot: Callable | None = None, rows_ahead: int = 0, known: dict | None = None) -> Solution:
     """Run a stage-4 implementation's shooting loop (``calls.progressive``, R3, checked) on rows from
     ``rows.row(i)``, and its ambient term (``calls.ambient``, R4) for the display; counts rows and skipped patches.
 
     ``rows_ahead`` > 0 renders that many likely next shooters' rows with each row not yet rendered
-    (:class:`RowsAhead`; only for a source with ``rows`` and ``has_row``, the hemicube engine)."""
+    (:class:`RowsAhead`; only for a source with ``rows`` and ``has_row``, the hemicube engine). With ``known``
+    (patch → row, kept from an earlier solve of the same patches) the implementation's R6 solves instead, asking
+    ``rows`` only for the rows it does not know, and adds them to ``known``."""
     validate_system(areas, reflectance, emission)
     n = len(areas)
     max_shots = max_shots or 1000 * n
@@ -153,9 +155,9 @@ def solve_progressive(calls: Any, rows: Any, areas: np.ndarray, reflectance: np.
             on_shot(shots, i, radiosity, unshot)
 
     start = time.perf_counter()
-    radiosity, unshot, order = calls.progressive(row, areas.copy(), reflectance.copy(), emission.copy(),
-                                                 float(tolerance), int(max_shots), float(overshoot),
-                                                 shot if source.can_batch or on_shot is not None else None)
+    args = (row, areas.copy(), reflectance.copy(), emission.copy(), float(tolerance), int(max_shots), float(overshoot),
+            shot if source.can_batch or on_shot is not None else None)
+    radiosity, unshot, order = calls.progressive(*args) if known is None else calls.resolve(known, *args)
     seconds = time.perf_counter() - start
     emitted = energy(emission, areas)
     residual = energy(unshot, areas) / emitted if emitted > 0 else 0.0

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import ast
 
-from bench.mutation import apply, mutants_of, stage_mutants, task_score
+import bench.mutation as mutation
+from bench.mutation import GraderFailed, apply, mutants_of, stage_mutants, task_score
 
 SOURCE = '''import numpy as np
 
@@ -50,7 +51,7 @@ def test02_every_mutant_is_a_program_that_differs_from_the_source():
 
 def test03_the_reference_has_mutants_in_every_task_with_code():
     tasks = {m.task for m in stage_mutants("radiosity")}
-    assert tasks == {"R1", "R2", "R3", "R4", "R5"}
+    assert tasks == {"R1", "R2", "R3", "R4", "R5", "R6"}
 
 
 def test04_a_planted_mistake_loses_its_tasks_points(tmp_path):
@@ -58,3 +59,12 @@ def test04_a_planted_mistake_loses_its_tasks_points(tmp_path):
     mutant = next(m for m in stage_mutants("radiosity") if m.task == "R2" and m.kind == "operator" and m.before == "/")
     got, full = task_score("radiosity", apply(mutant, tmp_path), "R2")
     assert full > 0 and got < full
+
+
+def test05_a_mutant_the_grader_wrote_nothing_for_is_not_graded_never_killed(monkeypatch):
+    """A kit that cannot start (a broken import while the checkout changes) once counted every mutant as killed."""
+    def broken(stage, submission, task):
+        raise GraderFailed("exit 1: ImportError")
+    monkeypatch.setattr(mutation, "task_score", broken)
+    report = mutation.run("radiosity", sample=2, progress=lambda line: None)
+    assert report["errors"] == 2 and report["killed"] == 0 and not any(r["killed"] for r in report["rows"])

@@ -26,7 +26,7 @@ def points_by_task(result) -> dict[str, float]:
 def test01_tests_are_declared_with_points_visibility_and_tolerance():
     tests = load_tests("radiosity")
     assert sum(t.points for t in tests) == 100
-    assert {t.task for t in tests} == {f"R{i}" for i in range(1, 6)}
+    assert {t.task for t in tests} == {f"R{i}" for i in range(1, 7)}
     assert any(t.hidden for t in tests) and any(not t.hidden for t in tests)
     assert all(t.tolerance for t in tests) and len({t.number for t in tests}) == len(tests)
 
@@ -46,12 +46,15 @@ def reference_grade(reference_grade_of):
      "return positions, sums / 4.0, inverse.astype(np.int64)", {"R5"}),
     ("shooting.py", "received = np.outer(row * (areas[i] / areas), delta)", "received = np.outer(row, delta)",
      {"R2", "R3"}),
+    ("resolve.py", "return progressive_refinement(remembered,", "return progressive_refinement(row,", {"R6"}),
+    ("resolve.py", "            known[i] = row(i)\n        return known[i]", "            return row(i)\n        return known[i]",
+     {"R6"}),
 ])
 def test04_one_broken_function_loses_its_task_and_what_calls_it(make_submission, file, old, new, lost):
     """The image tests show the reference's R3 and R4 values (R5 alone is judged); only R3 runs the student's R2,
     and its failing tests say so."""
     result = grade("radiosity", make_submission("radiosity", file, old, new), show_progress=False)
-    full = {t: sum(x.points for x in load_tests("radiosity") if x.task == t) for t in ("R1", "R2", "R3", "R4", "R5")}
+    full = {t: sum(x.points for x in load_tests("radiosity") if x.task == t) for t in ("R1", "R2", "R3", "R4", "R5", "R6")}
     got = points_by_task(result)
     for task, points in full.items():
         if task in lost:
@@ -116,6 +119,8 @@ def test07_bench_writes_its_table_json_and_plot(tmp_path):
         assert 0.5 < m["progressive"]["shots"] / m["maximum (1988)"]["shots"] < 2.0
     for case in report["cases"]:                       # every method gets within 0.1% of the direct solve
         assert all(m["seconds_to_0.001"] is not None for m in case["methods"].values()), case["scene"]
+    for case in report["resolve"]["cases"]:          # R6: a change of colours or lights renders no hemicube
+        assert case["reused_hemicubes"] == 0 < case["fresh_hemicubes"] and case["max_difference"] < 1e-4
     exact = [f for f in report["furnace"] if f["form_factors"].startswith("exact")]
     assert all(abs(f["mean_error"]) <= 1e-4 for f in exact)
     assert all(0 < case["formfactor_noise"] < 0.1 for case in report["cases"])

@@ -73,8 +73,8 @@ def shot_matches(out, expected, p) -> Verdict:
                    f"(ΔRad_j = ρ_j ΔB_i F_ij A_i / A_j, then ΔB_i = 0)")
 
 
-def loop_matches(out, expected, p) -> Verdict:
-    """Order of shots and B, ΔB after them, against the loop worked by hand (linear search, no heap)."""
+def _same_loop(out, expected, p) -> Verdict | None:
+    """None when the order of shots and B, ΔB after them are the loop's worked by hand; else the verdict."""
     n = len(p["areas"])
     order = [int(i) for i in np.asarray(expected["order"]).ravel()]
     got = [int(i) for i in output(out, "order", (None,), "order")]
@@ -86,10 +86,43 @@ def loop_matches(out, expected, p) -> Verdict:
     if not (np.allclose(B, expected["radiosity"], rtol=TOL.LOOP_RTOL, atol=TOL.FLOAT64_ATOL)
             and np.allclose(dB, expected["unshot"], rtol=TOL.LOOP_RTOL, atol=TOL.FLOAT64_ATOL)):
         return Verdict(0.5, "the order of shots is right but B or ΔB are not")
+    return None
+
+
+def loop_matches(out, expected, p) -> Verdict:
+    """Order of shots and B, ΔB after them, against the loop worked by hand (linear search, no heap)."""
+    wrong = _same_loop(out, expected, p)
+    if wrong:
+        return wrong
+    order = [int(i) for i in np.asarray(expected["order"]).ravel()]
+    B = output(out, "radiosity", (len(p["areas"]), 3), "radiosity")
     fetched = _rows_fetched(out, len(order)) or _on_shot_reported(out, order, B)
     if fetched:
         return Verdict(0.5, f"B and ΔB are right, but {fetched}")
     return Verdict(1.0, f"{len(order)} shots in the right order with the right B and ΔB")
+
+
+def resolve_matches(out, expected, p) -> Verdict:
+    """R6: R3's result, computing only the rows not known (each once, none known again), and keeping them."""
+    wrong = _same_loop(out, expected, p)
+    if wrong:
+        return Verdict(wrong.score * 0.5, f"{wrong.message} (R6 solves as R3 does)")
+    want = [int(i) for i in np.asarray(expected["rows_asked"]).ravel()]
+    asked = [int(i) for i in output(out, "rows_asked", (None,), "rows_asked")]
+    if asked != want:
+        again = sorted({i for i in asked if i in set(int(k) for k in p["known_rows"]) or asked.count(i) > 1})
+        return Verdict(0.25, f"B and ΔB are right, but row() computed rows {asked[:8]}{'…' if len(asked) > 8 else ''} "
+                       f"where only {want[:8]}{'…' if len(want) > 8 else ''} were not known"
+                       + (f" (known or already computed: {again[:8]})" if again else "")
+                       + "; take a row from known when it is there, and compute each other one once")
+    kept = [int(i) for i in output(out, "known_after", (None,), "known_after")]
+    should = sorted({int(i) for i in p["known_rows"]} | set(want))
+    if sorted(kept) != should or not bool(output(out, "known_rows_right", (), "known_rows_right")):
+        return Verdict(0.5, f"B, ΔB and the rows computed are right, but known holds rows {sorted(kept)[:8]} "
+                       f"afterwards where it should hold {should[:8]} (add each computed row under int(i), as row() "
+                       f"returned it, so a later solve finds it)")
+    return Verdict(1.0, f"{len(np.asarray(expected['order']).ravel())} shots as R3 takes them, {len(want)} rows "
+                   f"computed, {len(p['known_rows'])} reused")
 
 
 def _rows_fetched(out, shots: int) -> str | None:

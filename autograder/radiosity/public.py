@@ -119,6 +119,32 @@ def by_hand_test(name, points, system, max_shots, tolerance=0.0, overshoot=1.0) 
                 timeout=SOLVE, depends_on=("R2",), vary=variant(variants.progressive))
 
 
+def resolve_case(system: dict, known: str, overshoot: float = 1.0, tolerance: float = 1e-4) -> dict:
+    """R6's parameters from a system, by what the earlier solve left in ``known``: "all" (every row: the light is
+    recoloured, so no row may be computed), "painted" (the rows of the shooters of a solve in which the darkest
+    non-emitting patch was black; now it is white and shoots, so its row is new) or "none" (nothing: each shooter's
+    row is computed once, however often it shoots)."""
+    n, params = len(system["areas"]), {"tolerance": tolerance, "max_shots": 100_000, "overshoot": overshoot}
+    if known == "all":
+        emission = (np.asarray(system["emission"]) * [0.25, 1.0, 2.5]).tolist()
+        return {**system, **params, "emission": emission, "known_rows": list(range(n))}
+    if known == "painted":
+        E, rho = np.asarray(system["emission"]), np.array(system["reflectance"])
+        k = int(np.argmin(np.where(E.sum(axis=1) > 0, np.inf, rho.sum(axis=1))))
+        rho[k] = 0.0
+        before = truths.shooting_loop({**system, **params, "reflectance": lists(rho)})["order"].tolist()
+        rho[k] = 0.95
+        return {**system, **params, "reflectance": lists(rho), "known_rows": sorted(set(before))}
+    return {**system, **params, "known_rows": []}
+
+
+def resolve_test(name, points, system, known: str, overshoot: float = 1.0) -> Test:
+    return Test(name, "R6", points, "resolve", resolve_case(system, known, overshoot), check(checks.resolve_matches),
+                f"R3's shots, B and ΔB within {TOL.LOOP_RTOL}; row() only for rows not known, each once; known kept",
+                expected="none", truth=truth(truths.resolved), timeout=SOLVE, depends_on=("R3",),
+                vary=variant(variants.resolve, known=known))
+
+
 def furnace_test(name, points, albedo, tolerance, overshoot=1.0) -> Test:
     params = {**furnace_cube(albedo), "tolerance": tolerance, "max_shots": 100_000, "overshoot": overshoot}
     return Test(name, "R3", points, "progressive", params, check(checks.furnace_uniform, want=truths.furnace(1.0, albedo)),
@@ -238,8 +264,8 @@ TESTS = [
     by_hand_test("R3 progressive_refinement: a closed random system to 1e-4, which stops in the middle of a sweep "
                  "(the unshot energy checked before every shot, not only as a sweep starts)", 3, CLOSED_FIVE, 100_000,
                  tolerance=1e-4),
-    furnace_test("R3 progressive_refinement: the furnace, ρ = 0.9", 5, 0.9, 1e-4),
-    scene_solve_test("R3 progressive_refinement: the Cornell box converges to the direct solve", 7, CORNELL, 140.0),
+    furnace_test("R3 progressive_refinement: the furnace, ρ = 0.9", 3, 0.9, 1e-4),
+    scene_solve_test("R3 progressive_refinement: the Cornell box converges to the direct solve", 4, CORNELL, 140.0),
     ambient_test("R4 ambient_term: the hand-worked scene after one shot", 6, HAND["areas"], HAND["reflectance"],
                  [[0.0, 0.0, 0.0], [3.0, 1.2, 0.36], [1.6, 0.2, 0.24]]),
     ambient_test("R4 ambient_term: after an overshot shot (a negative ΔB counts with its sign)", 2, HAND["areas"],
@@ -252,5 +278,11 @@ TESTS = [
                 *noisy_grid(1000.0, 3, np.random.default_rng(13)), "noisy"),
     vertex_test("R5 vertex_colors: a hexagon fanned into triangles, each repeating a corner the next one shares", 3,
                 *fan_patches(6, 1.0), lists(np.random.default_rng(9).uniform(0, 1, (4, 3))), "fan"),
-    render_test("R5 render: the Cornell box", 8, CORNELL, (128, 128), 100.0),
+    render_test("R5 render: the Cornell box", 5, CORNELL, (128, 128), 100.0),
+    resolve_test("R6 resolve: the light recoloured, every row known from the earlier solve: none computed", 4,
+                 random_system(6, seed=21), "all"),
+    resolve_test("R6 resolve: a black patch painted white: only rows not known are computed", 2,
+                 random_system(7, seed=22), "painted"),
+    resolve_test("R6 resolve: nothing known, overshooting 1.5: each shooter's row computed once", 2,
+                 random_system(5, seed=23), "none", overshoot=1.5),
 ]

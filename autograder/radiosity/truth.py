@@ -210,6 +210,17 @@ def shooting_loop(p: dict) -> dict[str, np.ndarray]:
     return {"radiosity": B, "unshot": dB, "order": np.array(order, dtype=np.int64)}
 
 
+def resolved(p: dict) -> dict[str, np.ndarray]:
+    """R6: R3's loop worked by hand, and the rows it must compute: each shooter not in ``known_rows``, once, in the
+    order of its first shot."""
+    out = shooting_loop(p)
+    known, asked = {int(i) for i in p["known_rows"]}, []
+    for i in out["order"].tolist():
+        if i not in known and i not in asked:
+            asked.append(i)
+    return {**out, "rows_asked": np.array(asked, dtype=np.int64)}
+
+
 def stops_within_a_sweep(p: dict) -> bool:
     """Whether the tolerance stops this loop in the middle of a sweep (so a loop checking it only as sweeps start,
     with frozen keys, shoots more)."""

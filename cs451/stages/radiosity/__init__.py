@@ -16,20 +16,19 @@ from __future__ import annotations
 import contextlib
 import math
 import sys
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Iterator, Literal
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from ... import drawing, patching, schema, solvers
-from ...errors import KitError
+from ... import drawing, patching, solvers
 from ... import specular as glossy       # the module; `specular` is also an option below
 from ...patching import Patches
+from ...errors import KitError
 from ...solvers import MatrixRows, Solution, solve_direct, shooting_matrix
 from ...scene import AreaLight, Polygon, Scene, parse_scene
-from ...schema import Context, field
 from ..base import Out, Probes, Stage, Task, check_returns, part, student_call
+from .options import RadiosityOptions
 
 TASKS = (
     Task("R1", "subdivide", "Subdividing into patches", ("quads", "max_edge"),
@@ -44,6 +43,10 @@ TASKS = (
     Task("R5", "vertex_colors", "Vertex colours", ("quads", "parent", "radiosity"),
          (Out("positions", (None, 3)), Out("colors", ("len(positions)", 3)),
           Out("corners", ("len(quads)", 4), kind="i", below="len(positions)"))),
+    Task("R6", "resolve", "Solving again with the rows already known",
+         ("known", "row", "areas", "reflectance", "emission", "tolerance", "max_shots", "overshoot", "on_shot"),
+         (Out("radiosity", ("len(areas)", 3)), Out("unshot", ("len(areas)", 3)),
+          Out("order", (None,), kind="i", below="len(areas)"))),
 )
 
 SOLVERS = ("progressive", "jacobi", "gauss-seidel", "direct")
@@ -52,47 +55,6 @@ SOLVERS = ("progressive", "jacobi", "gauss-seidel", "direct")
 ROWS_PER_BATCH = 16
 #: a patch blind from its centre (under a block resting on it) shoots from the seeing part of a 3 × 3 grid over it
 RESAMPLE_BLIND = 3
-
-
-@dataclass(frozen=True)
-class RadiosityOptions:
-    patch_size: float = field("Longest patch edge after subdivision, in scene units (0: the polygons as they are).",
-                              0.0, schema.non_negative)
-    tolerance: float = field("Stop when the unshot energy Σ|ΔB|·A is at most this fraction of the emitted energy ΣE·A.",
-                             1e-3, schema.positive)
-    max_shots: int = field("Most shots (progressive) or sweeps (Jacobi, Gauss-Seidel) before giving up; 0: 1000 per patch.",
-                           0, schema.non_negative)
-    ambient: bool = field("Show B + ρ·ambient, the 1988 paper's ambient term for previews (false: B alone).", True)
-    overshoot: float = field("Shoot ω·ΔB and leave (1 − ω)·ΔB (1: plain progressive refinement; 1 < ω < 2 overshoots).",
-                             1.0, schema.positive)
-    solver: Literal["progressive", "jacobi", "gauss-seidel", "direct"] = field(
-        "progressive (the student's shooting loop), or a full-matrix method for comparison.", "progressive")
-    resolution: int = field("Hemicube resolution: pixels across the top face (even).", 128, schema.at_least(8))
-    proximity: Literal["contour", "none"] = field(
-        "Stage 3's fix for close patches: 'none' (rows of a closed scene sum to 1, so energy is conserved) or "
-        "'contour' (stage 3's default: each entry corrected for the shooter's extent, within 1% of the closed forms; "
-        "but rows then sum to up to 0.16% over 1, which a furnace of albedo 0.99 amplifies a hundredfold, and the "
-        "Cornell box's 901 rows take 12 s instead of 2.6).", "none")
-    # the grader's trusted form factors (probe_system) take this default too: see hemicube_formfactors
-    reciprocity: bool = field(
-        "Make the hemicube's rows reciprocal (A_i F_ij = A_j F_ji), keeping each row's sum, before solving "
-        "(cs451.formfactors.reciprocity): a uniform furnace is then uniform patch by patch, not only on average. "
-        "It needs every row, so the shooting loop runs on the whole matrix, computed first: n hemicubes where "
-        "shooting renders only its shooters' rows, and 6 n × n arrays at the peak; the scaling takes 1 ms for 100 "
-        "patches, 2 s for 2,400.", False)
-    exposure: float = field("Multiplies the displayed radiance, before the scene's own exposure.", 1.0, schema.positive)
-    specular: bool = field(
-        "Add the direct surface reflection of the area lights (notes §2.3) to the display, per pixel, for materials "
-        "with a specular above 0 and a shininess above 0 (cs451.specular: a normalised Phong lobe, no shadows); "
-        "scenes without such a material are drawn exactly as with false. The solve is the same either way.", True)
-    specular_samples: int = field("Points per edge of each area light for the highlight (a k × k grid).",
-                                  glossy.DEFAULT_SAMPLES, glossy.check_samples)
-
-    def validate(self, ctx: Context) -> None:
-        if not self.overshoot < 2.0:
-            raise ctx.child("overshoot").error(f"must be below 2 (shooting diverges from 2 on), got {self.overshoot}")
-        if not self.tolerance < 1.0:
-            raise ctx.child("tolerance").error(f"must be below 1, got {self.tolerance}")
 
 
 # --- calling the student's functions, with checks on what they return ------------
@@ -118,9 +80,20 @@ def call_vertex_colors(impl: Any, quads: np.ndarray, parent: np.ndarray, radiosi
 def call_progressive(impl: Any, row: Callable, areas: np.ndarray, reflectance: np.ndarray, emission: np.ndarray,
                      tolerance: float, max_shots: int, overshoot: float, on_shot: Callable | None
                      ) -> tuple[np.ndarray, np.ndarray, list[int]]:
-    task = STAGE.task("R3")
-    args = (row, areas, reflectance, emission, tolerance, max_shots, overshoot, on_shot)
-    out = student_call(STAGE, impl, "R3", *args)
+    return _shooting_call(impl, "R3", (row, areas, reflectance, emission, tolerance, max_shots, overshoot, on_shot))
+
+
+def call_resolve(impl: Any, known: dict, row: Callable, areas: np.ndarray, reflectance: np.ndarray,
+                 emission: np.ndarray, tolerance: float, max_shots: int, overshoot: float, on_shot: Callable | None
+                 ) -> tuple[np.ndarray, np.ndarray, list[int]]:
+    return _shooting_call(impl, "R6", (known, row, areas, reflectance, emission, tolerance, max_shots, overshoot,
+                                       on_shot))
+
+
+def _shooting_call(impl: Any, task_id: str, args: tuple) -> tuple[np.ndarray, np.ndarray, list[int]]:
+    """R3 or R6: both return R3's ``(radiosity, unshot, order)``."""
+    task = STAGE.task(task_id)
+    out = student_call(STAGE, impl, task_id, *args)
     if isinstance(out, (tuple, list)) and len(out) == 3 and not isinstance(out[2], np.ndarray):
         try:                              # the order may be any iterable of indices (a list, a generator)
             out = (out[0], out[1], list(out[2]))
@@ -141,6 +114,9 @@ class _Calls:
 
     def progressive(self, *args: Any) -> tuple[np.ndarray, np.ndarray, list[int]]:
         return call_progressive(self.impl, *args)
+
+    def resolve(self, *args: Any) -> tuple[np.ndarray, np.ndarray, list[int]]:
+        return call_resolve(self.impl, *args)
 
     def ambient(self, areas: np.ndarray, reflectance: np.ndarray, unshot: np.ndarray) -> np.ndarray:
         return call_ambient(self.impl, areas, reflectance, unshot)
@@ -311,6 +287,34 @@ def probe_progressive(impl: Any, tolerance: float, max_shots: int, overshoot: fl
             "rows_requested": np.asarray(rows.counters["rows_computed"] + rows.counters["rows_cached_hits"]),
             "direct": solve_direct(shooting_matrix(F_, a), rho, E),
             "areas": a, "emission": E, "reflectance": rho}
+
+
+@PROBES.register
+def probe_resolve(impl: Any, known_rows: list, tolerance: float, max_shots: int, overshoot: float = 1.0,
+                  F: list | None = None, areas: list | None = None, reflectance: list | None = None,
+                  emission: list | None = None, **given: np.ndarray) -> dict[str, np.ndarray]:
+    """R6 on a small system: ``known`` starts with the rows of ``known_rows``; which rows it asks ``row`` for, and
+    what ``known`` holds afterwards."""
+    F_, a, rho, E = _system({"F": F, "areas": areas, "reflectance": reflectance, "emission": emission}, given)
+    known: dict = {int(i): F_[int(i)].copy() for i in known_rows}
+    asked: list[int] = []
+
+    def row(i: Any) -> np.ndarray:
+        i = int(i)
+        if not 0 <= i < len(F_):
+            raise KitError(f"R6 resolve() asked for row {i} of {len(F_)}")
+        asked.append(i)
+        return F_[i].copy()
+
+    radiosity, unshot, order = call_resolve(impl, known, row, a.copy(), rho.copy(), E.copy(), float(tolerance),
+                                            int(max_shots), float(overshoot), None)
+    keys = [k for k in known if isinstance(k, (int, np.integer)) and 0 <= k < len(F_)]
+    right = len(keys) == len(known) and all(
+        np.shape(known[k]) == (len(F_),) and np.array_equal(np.asarray(known[k], dtype=np.float64), F_[int(k)])
+        for k in keys)
+    return {"radiosity": radiosity, "unshot": unshot, "order": np.asarray(order, dtype=np.int64),
+            "rows_asked": np.asarray(asked, dtype=np.int64), "known_after": np.asarray(keys, dtype=np.int64),
+            "known_rows_right": np.asarray(right)}
 
 
 @PROBES.register
