@@ -104,8 +104,12 @@ FLOOR_POINTS = np.c_[_rng.uniform(-0.9, 0.9, 40), np.zeros(40), _rng.uniform(-0.
 UP = [[0, 1, 0]] * 40
 GREY = [[0.5, 0.5, 0.5]] * 40
 WEIGHTS = np.r_[_rng.uniform(0, 1, (30, 3)), _rng.uniform(0.5, 2, (6, 3)), np.zeros((2, 3)),
-                [[1e-3, 0, 0], [1.0, 1.0, 1.0]]].round(6).tolist()
-ROULETTE_U = _rng.random(len(WEIGHTS)).round(6).tolist()
+                [[1e-3, 0, 0], [1.0, 1.0, 1.0], [0.25, 0.1, 0.0]]].round(6).tolist()
+#: the last path draws u = p exactly: it ends (it goes on where u < p)
+ROULETTE_U = _rng.random(len(WEIGHTS) - 1).round(6).tolist() + [0.25]
+#: points at the light's height (y = 1) facing it sideways: the light is edge-on (cos θ_L = 0), so no shadow ray
+EDGE_ON = ([[0.6, 1.0, 0.0], [-0.6, 1.0, 0.1], [0.0, 1.0, 0.7], [0.1, 1.0, -0.8]],
+           [[-1, 0, 0], [1, 0, 0], [0, 0, -1], [0, 0, 1]])
 NORMALS = _unit([[0, 0, 1], [0, 0, -1], [1, 0, 0], [0, -1, 0], [0.3, -0.5, 0.8], [-0.6, 0.7, -0.2]])
 
 TESTS = [
@@ -116,8 +120,9 @@ TESTS = [
                     _unit([[1e-7, 3e-8, 1.0], [-2e-7, 1e-7, -1.0]]), 500, 8, near_poles=True),
     direct_test("P2 direct_light: each sample by its formula, some behind a blocker", 8, open_scene(), FLOOR_POINTS,
                 UP, GREY, 4),
-    shadow_count_test("P2 direct_light: a shadow ray only where the surface faces the light", 4, open_scene(),
-                      FLOOR_POINTS[:20] * 2, UP[:20] + [[0, -1, 0]] * 20, GREY, 5),
+    shadow_count_test("P2 direct_light: a shadow ray only where the surface faces the light (not where it is edge-on)",
+                      4, open_scene(), FLOOR_POINTS[:20] * 2 + EDGE_ON[0], UP[:20] + [[0, -1, 0]] * 20 + EDGE_ON[1],
+                      GREY[:4] * 11, 5),
     lambert_test("P2 direct_light: the mean is the direct light (Lambert's formula)", 8, open_scene(blocker=False),
                  [[0, 0, 0], [0.7, 0, 0.2], [-0.9, 0, -0.9]], [[0, 1, 0]] * 3, [[0.5, 0.5, 0.5]] * 3, 20_000, 6),
     roulette_test("P3 roulette: on with p = min(1, max β), weighed by 1/p", 10, WEIGHTS, ROULETTE_U),

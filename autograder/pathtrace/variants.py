@@ -34,9 +34,12 @@ def normals(p: dict, rng: np.random.Generator, near_poles: bool = False) -> Case
 
 
 def points(p: dict, rng: np.random.Generator) -> Case:
-    """As many fresh points on the floor (x, z in [-0.9, 0.9]), fresh colours, a fresh seed; normals as they were."""
+    """As many fresh points on the floor (x, z in [-0.9, 0.9]), fresh colours, a fresh seed; normals as they were.
+    A point at the light's height (the light edge-on to it) stays where it is."""
     k = len(p["points"])
     x = np.c_[rng.uniform(-0.9, 0.9, k), np.zeros(k), rng.uniform(-0.9, 0.9, k)]
+    edge_on = np.asarray(p["points"], float)[:, 1] != 0.0
+    x[edge_on] = np.asarray(p["points"], float)[edge_on]
     albedo = rng.uniform(0.1, 0.95, (k, 3))
     return Case({**p, "points": np.round(x, 4).tolist(), "albedo": np.round(albedo, 3).tolist(), "seed": _seed(rng)},
                 f"{k} fresh points and colours on the floor")
@@ -48,8 +51,11 @@ def weights(p: dict, rng: np.random.Generator) -> Case:
     beta = rng.uniform(0, 1, (k, 3))
     beta[: k // 6] *= 2.5
     beta[-2:] = 0.0
-    return Case({"weights": np.round(beta, 6).tolist(), "u": np.round(rng.random(k), 6).tolist()},
-                f"{k} fresh weights and uniform numbers")
+    u = np.round(rng.random(k), 6)
+    tie = np.round(rng.uniform(0.1, 0.9), 6)          # one path draws u = p exactly: it ends
+    beta[-3], u[-3] = [tie, np.round(tie * rng.uniform(0, 1), 6), 0.0], tie
+    return Case({"weights": np.round(beta, 6).tolist(), "u": u.tolist()},
+                f"{k} fresh weights and uniform numbers, one with u = p")
 
 
 def light_rays(p: dict, rng: np.random.Generator) -> Case:
