@@ -157,7 +157,7 @@ def solve_progressive(calls: Any, rows: Any, areas: np.ndarray, reflectance: np.
     start = time.perf_counter()
     args = (row, areas.copy(), reflectance.copy(), emission.copy(), float(tolerance), int(max_shots), float(overshoot),
             shot if source.can_batch or on_shot is not None else None)
-    radiosity, unshot, order = calls.progressive(*args) if known is None else calls.resolve(known, *args)
+    radiosity, unshot, order = calls.progressive(*args) if known is None else calls.again(known, *args)
     seconds = time.perf_counter() - start
     emitted = energy(emission, areas)
     residual = energy(unshot, areas) / emitted if emitted > 0 else 0.0

@@ -46,8 +46,8 @@ def reference_grade(reference_grade_of):
      "return positions, sums / 4.0, inverse.astype(np.int64)", {"R5"}),
     ("shooting.py", "received = np.outer(row * (areas[i] / areas), delta)", "received = np.outer(row, delta)",
      {"R2", "R3"}),
-    ("resolve.py", "return progressive_refinement(remembered,", "return progressive_refinement(row,", {"R6"}),
-    ("resolve.py", "            known[i] = row(i)\n        return known[i]", "            return row(i)\n        return known[i]",
+    ("solve_again.py", "return progressive_refinement(remembered,", "return progressive_refinement(row,", {"R6"}),
+    ("solve_again.py", "            known[i] = row(i)\n        return known[i]", "            return row(i)\n        return known[i]",
      {"R6"}),
 ])
 def test04_one_broken_function_loses_its_task_and_what_calls_it(make_submission, file, old, new, lost):
@@ -119,7 +119,7 @@ def test07_bench_writes_its_table_json_and_plot(tmp_path):
         assert 0.5 < m["progressive"]["shots"] / m["maximum (1988)"]["shots"] < 2.0
     for case in report["cases"]:                       # every method gets within 0.1% of the direct solve
         assert all(m["seconds_to_0.001"] is not None for m in case["methods"].values()), case["scene"]
-    for case in report["resolve"]["cases"]:          # R6: a change of colours or lights renders no hemicube
+    for case in report["solve_again"]["cases"]:          # R6: a change of colours or lights renders no hemicube
         assert case["reused_hemicubes"] == 0 < case["fresh_hemicubes"] and case["max_difference"] < 1e-4
     exact = [f for f in report["furnace"] if f["form_factors"].startswith("exact")]
     assert all(abs(f["mean_error"]) <= 1e-4 for f in exact)

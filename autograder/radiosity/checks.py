@@ -102,7 +102,7 @@ def loop_matches(out, expected, p) -> Verdict:
     return Verdict(1.0, f"{len(order)} shots in the right order with the right B and ΔB")
 
 
-def resolve_matches(out, expected, p) -> Verdict:
+def solve_again_matches(out, expected, p) -> Verdict:
     """R6: R3's result, computing only the rows not known (each once, none known again), and keeping them."""
     wrong = _same_loop(out, expected, p)
     if wrong:

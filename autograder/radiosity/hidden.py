@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from autograder.radiosity import truth as truths
-from autograder.radiosity.public import (fan_patches, far_grid, resolve_test, CORNELL, ROOM, by_hand_test, furnace_test, lists, random_system, render_test,
+from autograder.radiosity.public import (fan_patches, far_grid, solve_again_test, CORNELL, ROOM, by_hand_test, furnace_test, lists, random_system, render_test,
                                          scene_quads, scene_solve_test, scene_variant, shoot_test, subdivide_test,
                                          vertex_test, ambient_test)
 
@@ -40,8 +40,8 @@ TESTS = [
     vertex_test("R5 vertex_colors: a square 3 wide cut 3 × 3, -2^37 from the origin along y", 1,
                 *far_grid(3.0, 3, -2.0 ** 37, 1, np.random.default_rng(15)), "far"),
     render_test("R5 render: a coarse room", 2, SMALL_ROOM, (120, 90), 1.0),
-    resolve_test("R6 resolve: a closed system recoloured, every row known: none computed", 1,
+    solve_again_test("R6 solve_again: a closed system recoloured, every row known: none computed", 1,
                  random_system(8, seed=31, closed=True), "all"),
-    resolve_test("R6 resolve: nothing known, overshooting 1.7: each shooter's row computed once", 1,
+    solve_again_test("R6 solve_again: nothing known, overshooting 1.7: each shooter's row computed once", 1,
                  random_system(6, seed=32), "none", overshoot=1.7),
 ]

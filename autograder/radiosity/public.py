@@ -119,7 +119,7 @@ def by_hand_test(name, points, system, max_shots, tolerance=0.0, overshoot=1.0) 
                 timeout=SOLVE, depends_on=("R2",), vary=variant(variants.progressive))
 
 
-def resolve_case(system: dict, known: str, overshoot: float = 1.0, tolerance: float = 1e-4) -> dict:
+def solve_again_case(system: dict, known: str, overshoot: float = 1.0, tolerance: float = 1e-4) -> dict:
     """R6's parameters from a system, by what the earlier solve left in ``known``: "all" (every row: the light is
     recoloured, so no row may be computed), "painted" (the rows of the shooters of a solve in which the darkest
     non-emitting patch was black; now it is white and shoots, so its row is new) or "none" (nothing: each shooter's
@@ -138,11 +138,11 @@ def resolve_case(system: dict, known: str, overshoot: float = 1.0, tolerance: fl
     return {**system, **params, "known_rows": []}
 
 
-def resolve_test(name, points, system, known: str, overshoot: float = 1.0) -> Test:
-    return Test(name, "R6", points, "resolve", resolve_case(system, known, overshoot), check(checks.resolve_matches),
+def solve_again_test(name, points, system, known: str, overshoot: float = 1.0) -> Test:
+    return Test(name, "R6", points, "solve_again", solve_again_case(system, known, overshoot), check(checks.solve_again_matches),
                 f"R3's shots, B and ΔB within {TOL.LOOP_RTOL}; row() only for rows not known, each once; known kept",
                 expected="none", truth=truth(truths.resolved), timeout=SOLVE, depends_on=("R3",),
-                vary=variant(variants.resolve, known=known))
+                vary=variant(variants.solve_again, known=known))
 
 
 def furnace_test(name, points, albedo, tolerance, overshoot=1.0) -> Test:
@@ -279,10 +279,10 @@ TESTS = [
     vertex_test("R5 vertex_colors: a hexagon fanned into triangles, each repeating a corner the next one shares", 3,
                 *fan_patches(6, 1.0), lists(np.random.default_rng(9).uniform(0, 1, (4, 3))), "fan"),
     render_test("R5 render: the Cornell box", 5, CORNELL, (128, 128), 100.0),
-    resolve_test("R6 resolve: the light recoloured, every row known from the earlier solve: none computed", 4,
+    solve_again_test("R6 solve_again: the light recoloured, every row known from the earlier solve: none computed", 4,
                  random_system(6, seed=21), "all"),
-    resolve_test("R6 resolve: a black patch painted white: only rows not known are computed", 2,
+    solve_again_test("R6 solve_again: a black patch painted white: only rows not known are computed", 2,
                  random_system(7, seed=22), "painted"),
-    resolve_test("R6 resolve: nothing known, overshooting 1.5: each shooter's row computed once", 2,
+    solve_again_test("R6 solve_again: nothing known, overshooting 1.5: each shooter's row computed once", 2,
                  random_system(5, seed=23), "none", overshoot=1.5),
 ]

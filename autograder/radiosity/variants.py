@@ -113,12 +113,12 @@ def progressive(p: dict, rng: np.random.Generator) -> Case:
                         f"{p['tolerance']:g}, ω = {overshoot:g}; its shots: {order[:8]}{' …' if len(order) > 8 else ''}")
 
 
-def resolve(p: dict, rng: np.random.Generator, known: str) -> Case:
+def solve_again(p: dict, rng: np.random.Generator, known: str) -> Case:
     """A fresh system of as many patches (closed if the shipped one is), with the same kind of earlier solve."""
-    from autograder.radiosity.public import random_system, resolve_case
+    from autograder.radiosity.public import random_system, solve_again_case
     system = random_system(len(p["areas"]), int(rng.integers(1 << 30)), closed=_closed(p))
     overshoot = 1.0 if p["overshoot"] == 1.0 else num(rng.uniform(1.3, 1.7), 3)
-    params = resolve_case(system, known, overshoot, p["tolerance"])
+    params = solve_again_case(system, known, overshoot, p["tolerance"])
     return Case(params, f"a fresh {len(p['areas'])}-patch system, rows of patches {params['known_rows']} known, "
                         f"ω = {overshoot:g}")
 

@@ -5,7 +5,7 @@ The kit imports this package and calls only the names below (see
 """
 from .display import vertex_colors
 from .patches import subdivide
-from .resolve import resolve
+from .solve_again import solve_again
 from .shooting import ambient_term, progressive_refinement, shoot
 
-__all__ = ["subdivide", "shoot", "progressive_refinement", "ambient_term", "vertex_colors", "resolve"]
+__all__ = ["subdivide", "shoot", "progressive_refinement", "ambient_term", "vertex_colors", "solve_again"]

@@ -43,7 +43,7 @@ TASKS = (
     Task("R5", "vertex_colors", "Vertex colours", ("quads", "parent", "radiosity"),
          (Out("positions", (None, 3)), Out("colors", ("len(positions)", 3)),
           Out("corners", ("len(quads)", 4), kind="i", below="len(positions)"))),
-    Task("R6", "resolve", "Solving again with the rows already known",
+    Task("R6", "solve_again", "Solving again with the rows already known",
          ("known", "row", "areas", "reflectance", "emission", "tolerance", "max_shots", "overshoot", "on_shot"),
          (Out("radiosity", ("len(areas)", 3)), Out("unshot", ("len(areas)", 3)),
           Out("order", (None,), kind="i", below="len(areas)"))),
@@ -83,7 +83,7 @@ def call_progressive(impl: Any, row: Callable, areas: np.ndarray, reflectance: n
     return _shooting_call(impl, "R3", (row, areas, reflectance, emission, tolerance, max_shots, overshoot, on_shot))
 
 
-def call_resolve(impl: Any, known: dict, row: Callable, areas: np.ndarray, reflectance: np.ndarray,
+def call_solve_again(impl: Any, known: dict, row: Callable, areas: np.ndarray, reflectance: np.ndarray,
                  emission: np.ndarray, tolerance: float, max_shots: int, overshoot: float, on_shot: Callable | None
                  ) -> tuple[np.ndarray, np.ndarray, list[int]]:
     return _shooting_call(impl, "R6", (known, row, areas, reflectance, emission, tolerance, max_shots, overshoot,
@@ -115,8 +115,8 @@ class _Calls:
     def progressive(self, *args: Any) -> tuple[np.ndarray, np.ndarray, list[int]]:
         return call_progressive(self.impl, *args)
 
-    def resolve(self, *args: Any) -> tuple[np.ndarray, np.ndarray, list[int]]:
-        return call_resolve(self.impl, *args)
+    def again(self, *args: Any) -> tuple[np.ndarray, np.ndarray, list[int]]:
+        return call_solve_again(self.impl, *args)
 
     def ambient(self, areas: np.ndarray, reflectance: np.ndarray, unshot: np.ndarray) -> np.ndarray:
         return call_ambient(self.impl, areas, reflectance, unshot)
@@ -290,7 +290,7 @@ def probe_progressive(impl: Any, tolerance: float, max_shots: int, overshoot: fl
 
 
 @PROBES.register
-def probe_resolve(impl: Any, known_rows: list, tolerance: float, max_shots: int, overshoot: float = 1.0,
+def probe_solve_again(impl: Any, known_rows: list, tolerance: float, max_shots: int, overshoot: float = 1.0,
                   F: list | None = None, areas: list | None = None, reflectance: list | None = None,
                   emission: list | None = None, **given: np.ndarray) -> dict[str, np.ndarray]:
     """R6 on a small system: ``known`` starts with the rows of ``known_rows``; which rows it asks ``row`` for, and
@@ -302,11 +302,11 @@ def probe_resolve(impl: Any, known_rows: list, tolerance: float, max_shots: int,
     def row(i: Any) -> np.ndarray:
         i = int(i)
         if not 0 <= i < len(F_):
-            raise KitError(f"R6 resolve() asked for row {i} of {len(F_)}")
+            raise KitError(f"R6 solve_again() asked for row {i} of {len(F_)}")
         asked.append(i)
         return F_[i].copy()
 
-    radiosity, unshot, order = call_resolve(impl, known, row, a.copy(), rho.copy(), E.copy(), float(tolerance),
+    radiosity, unshot, order = call_solve_again(impl, known, row, a.copy(), rho.copy(), E.copy(), float(tolerance),
                                             int(max_shots), float(overshoot), None)
     keys = [k for k in known if isinstance(k, (int, np.integer)) and 0 <= k < len(F_)]
     right = len(keys) == len(known) and all(

@@ -82,5 +82,5 @@ if __name__ == "__main__":
     folder.mkdir(parents=True, exist_ok=True)
     result = measure()
     result["table"] = print_table(result)
-    (folder / "resolve.json").write_text(json.dumps(result, indent=1))
+    (folder / "solve_again.json").write_text(json.dumps(result, indent=1))
     print(f"wrote {folder / 'resolve.json'}")

@@ -13,7 +13,7 @@ import numpy as np
 from .shooting import progressive_refinement
 
 
-def resolve(known: dict, row: Callable[[int], np.ndarray], areas: np.ndarray, reflectance: np.ndarray,
+def solve_again(known: dict, row: Callable[[int], np.ndarray], areas: np.ndarray, reflectance: np.ndarray,
             emission: np.ndarray, tolerance: float, max_shots: int, overshoot: float,
             on_shot: Callable | None) -> tuple:
     """Solve the same patches again with new ``reflectance`` and ``emission``, as R3 does, reusing rows.
@@ -23,5 +23,12 @@ def resolve(known: dict, row: Callable[[int], np.ndarray], areas: np.ndarray, re
     and add it to ``known`` under ``int(i)``, so that later shots and later solves find it. Every other
     argument, the order of shots and the result are R3's: returns ``(radiosity, unshot, order)``.
     """
-    # TODO R6: a row function that looks in known first and remembers what it computes; then R3's loop (handout §R6)
-    raise NotImplementedError("R6: a row function that looks in known first and remembers what it computes; then R3's loop (handout §R6)")
+    # BEGIN SOLUTION R6: a row function that looks in known first and remembers what it computes; then R3's loop (handout §R6)
+    def remembered(i: int) -> np.ndarray:
+        i = int(i)
+        if i not in known:
+            known[i] = row(i)
+        return known[i]
+
+    return progressive_refinement(remembered, areas, reflectance, emission, tolerance, max_shots, overshoot, on_shot)
+    # END SOLUTION
