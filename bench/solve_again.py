@@ -83,4 +83,4 @@ if __name__ == "__main__":
     result = measure()
     result["table"] = print_table(result)
     (folder / "solve_again.json").write_text(json.dumps(result, indent=1))
-    print(f"wrote {folder / 'resolve.json'}")
+    print(f"wrote {folder / 'solve_again.json'}")

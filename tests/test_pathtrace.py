@@ -49,7 +49,7 @@ def mutant(tmp_path: Path, name: str):
 
 
 def radiosity_verdict(impl, seed: int) -> Verdict:
-    test = next(t for t in public.TESTS if t.probe == "polygon_radiance")
+    test = next(t for t in public.TESTS if t.check.name == "like_radiosity")
     params = {**test.params, "seed": seed}
     out = STAGE.probes["polygon_radiance"](impl, **params)
     return checks.like_radiosity(out, truth.radiosity_radiance(params), params)

@@ -131,6 +131,18 @@ def like_radiosity(out, expected, p) -> Verdict:
     want = np.asarray(expected["radiance"], float)
     mean = output(out, "mean", want.shape, "the mean radiance")
     error = output(out, "error", want.shape, "its standard error")
+    bounces = int(output(out, "bounce", (), "the bounce counter"))
+    paths = len(p["polygons"]) * int(p["samples"])
+    ceiling = TOL.PATH_SPREAD * want.max(axis=1, keepdims=True)
+    if not np.all(np.abs(error) <= ceiling):
+        k = int(np.argwhere(~(np.abs(error) <= ceiling))[0][0])
+        return Verdict(0.0, f"surface {p['polygons'][k]}: radiance {np.round(mean[k], 4).tolist()} ± "
+                            f"{np.round(error[k], 4).tolist()}: the paths spread far more than a correct path tracer's "
+                            f"(a standard error above {TOL.PATH_SPREAD:.0%} of radiosity's "
+                            f"{np.round(want[k], 4).tolist()}); does a path's weight β shrink at each bounce?")
+    if bounces < int(p["samples"]):
+        return Verdict(0.0, f"scene.counters['bounce'] is {bounces} for {paths} paths aimed at surfaces (add every "
+                            f"ray cast from a bounce)")
     allowed = Z * np.abs(error) + TOL.RADIOSITY_BIAS * want
     off = np.abs(mean - want) > allowed
     worst = float(np.max(np.abs(mean - want) / np.maximum(want, 1e-300)))
@@ -141,6 +153,38 @@ def like_radiosity(out, expected, p) -> Verdict:
     return Verdict(1.0, f"every surface within its allowance of radiosity (largest difference {worst:.1%})")
 
 
+@judged("every path brings some light")
+def lone_paths_lit(out, expected, p):
+    """Under the light with nothing in between, every path's first bounce sees the light (P2 is positive)."""
+    k = len(p["origins"])
+    radiance = output(out, "radiance", (k, 3), "the radiance")
+    dark = np.flatnonzero(~np.all(np.isfinite(radiance) & (radiance > 0), axis=1))
+    if len(dark):
+        return (f"ray {int(dark[0])}, traced alone, brings {np.round(radiance[dark[0]], 6).tolist()}: a path onto a lit "
+                f"floor adds the direct light at its first bounce, even when it is the only path")
+    camera, bounce = int(output(out, "camera", (), "the camera counter")), int(output(out, "bounce", (), "the bounce counter"))
+    if camera != k or bounce < k:
+        return f"counters camera {camera} and bounce {bounce} for {k} paths that each bounce at least once"
+
+
+@judged("the roulette ends as many paths as it should")
+def roulette_thins(out, expected, p):
+    """With the roulette from bounce 1 and at most 2 bounces, a path goes on after bounce 1 with probability at most
+    a (the largest albedo), and after bounce 2 at most a again: at most a·n + a²·n bounce rays on average."""
+    scene = p["scene"]
+    a = max(max(m["diffuse"]) for m in scene["materials"].values())
+    n = len(p["polygons"]) * int(p["samples"])
+    bound = (a + a * a + TOL.ROULETTE_SLACK) * n
+    bounces = int(output(out, "bounce", (), "the bounce counter"))
+    if bounces > bound:
+        return (f"{bounces} bounce rays for {n} paths in a box of albedo at most {a:g}, with the roulette from bounce "
+                f"{p['roulette_depth']}: at most {bound:.0f} expected (play the roulette from bounce "
+                f"scene.roulette_depth on; the first surface a camera ray meets is bounce 1)")
+
+
 @judged("L_e on the light's front, 0 elsewhere")
 def rays_match(out, expected, p):
+    camera = int(output(out, "camera", (), "the camera counter"))
+    if camera != len(p["origins"]):
+        return f"scene.counters['camera'] is {camera} for {len(p['origins'])} rays (add the rays radiance() is given)"
     return _differs(out, expected)

@@ -9,6 +9,7 @@ P4 is judged against stage 4: radiosity's solution of the same Cornell box.
 """
 from __future__ import annotations
 
+import copy
 import json
 
 import numpy as np
@@ -38,6 +39,10 @@ def open_scene(blocker: bool = True, albedo: float = 0.5) -> dict:
                        + ([{"type": "polygon", "vertices": box, "material": "grey"}] if blocker else []),
             "lights": [{"type": "area", "corner": [-0.25, 1, -0.25], "edge_u": [0.5, 0, 0], "edge_v": [0, 0, 0.5],
                         "radiance": [4, 3, 2]}]}
+
+
+#: the open scene's light and nothing else: its two triangles are the scene's first (a hit on triangle 0 is a hit)
+LIGHT_ALONE = {**open_scene(blocker=False), "objects": []}
 
 
 def _unit(v) -> list:
@@ -90,6 +95,29 @@ def light_rays_test(name, points, scene, origins, directions) -> Test:
                 expected="none", truth=truth(truths.light_seen), timeout=QUICK, vary=variant(variants.light_rays))
 
 
+def lone_paths_test(name, points, scene, origins, directions) -> Test:
+    return Test(name, "P4", points, "rays", {"scene": scene, "origins": origins, "directions": directions, "seed": 9,
+                                             "one_at_a_time": True},
+                check(checks.lone_paths_lit), "each path, traced alone, brings some light (its first bounce sees the light)",
+                expected="none", timeout=QUICK, vary=variant(variants.lone_paths))
+
+
+def roulette_count_test(name, points, scene, samples, seed) -> Test:
+    params = {"scene": scene, "polygons": CORNELL_SURFACES, "samples": samples, "seed": seed, "roulette_depth": 1,
+              "max_depth": 2}
+    return Test(name, "P4", points, "polygon_radiance", params, check(checks.roulette_thins),
+                f"bounce rays at most a + a² + {TOL.ROULETTE_SLACK:g} per path, a the largest albedo",
+                expected="none", timeout=PATHS, depends_on=("P1", "P2", "P3"), vary=variant(variants.seed))
+
+
+def dark_box() -> dict:
+    """The Cornell box with every albedo a tenth of its own: from bounce 1, the roulette ends nine paths in ten."""
+    scene = copy.deepcopy(CORNELL)
+    for material in scene["materials"].values():
+        material["diffuse"] = [round(c / 10, 4) for c in material["diffuse"]]
+    return scene
+
+
 def radiosity_test(name, points, scene, samples, seed) -> Test:
     params = {"scene": scene, "polygons": CORNELL_SURFACES, "samples": samples, "seed": seed}
     return Test(name, "P4", points, "polygon_radiance", params, check(checks.like_radiosity),
@@ -126,8 +154,13 @@ TESTS = [
     lambert_test("P2 direct_light: the mean is the direct light (Lambert's formula)", 8, open_scene(blocker=False),
                  [[0, 0, 0], [0.7, 0, 0.2], [-0.9, 0, -0.9]], [[0, 1, 0]] * 3, [[0.5, 0.5, 0.5]] * 3, 20_000, 6),
     roulette_test("P3 roulette: on with p = min(1, max β), weighed by 1/p", 10, WEIGHTS, ROULETTE_U),
-    light_rays_test("P4 radiance: the light's front, its back, and nothing", 5, open_scene(),
+    light_rays_test("P4 radiance: the light alone, rays into both halves of its front", 1, LIGHT_ALONE,
+                    [[-0.2, 0.5, -0.1], [0.2, 0.5, 0.1], [0.1, 0.5, -0.2], [-0.1, 0.5, 0.2]], [[0, 1, 0]] * 4),
+    lone_paths_test("P4 radiance: one path at a time onto the floor under the light", 1, open_scene(blocker=False),
+                    [[x, 0.5, z] for x, z in ((0.0, 0.0), (0.1, -0.1), (-0.15, 0.05))], [[0, -1, 0]] * 3),
+    roulette_count_test("P4 radiance: roulette from bounce 1 in a dark box: few paths go on", 2, dark_box(), 1000, 8),
+    light_rays_test("P4 radiance: the light's front, its back, and nothing", 3, open_scene(),
                     [[0, 0.9, 0], [0.1, 0.95, -0.1], [0, 1.5, 0], [0.1, 1.2, 0.1], [0, 1.5, 0], [-2, 0.5, 0]],
                     _unit([[0, 1, 0], [0, 1, 0.2], [0, -1, 0], [0.1, -1, 0], [0, 1, 0], [-1, 0, 0]])),
-    radiosity_test("P4 radiance: the Cornell box, surface by surface, against radiosity", 20, CORNELL, 8000, 7),
+    radiosity_test("P4 radiance: the Cornell box, surface by surface, against radiosity", 18, CORNELL, 8000, 7),
 ]

@@ -69,6 +69,14 @@ def light_rays(p: dict, rng: np.random.Generator) -> Case:
                 "fresh rays to the light's front, onto its back and into nothing")
 
 
+def lone_paths(p: dict, rng: np.random.Generator) -> Case:
+    """As many fresh rays straight down onto the floor under the light (x, z within 0.2 of its centre)."""
+    k = len(p["origins"])
+    origins = np.c_[rng.uniform(-0.2, 0.2, k), np.full(k, 0.5), rng.uniform(-0.2, 0.2, k)]
+    return Case({**p, "origins": np.round(origins, 4).tolist(), "seed": _seed(rng)},
+                f"{k} fresh rays down onto the floor under the light, one call each")
+
+
 def seed(p: dict, rng: np.random.Generator) -> Case:
     """The same surfaces with a fresh seed: new points on them and new paths."""
     return Case({**p, "seed": _seed(rng)}, "new random points and paths")

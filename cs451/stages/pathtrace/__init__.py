@@ -140,11 +140,16 @@ def probe_roulette(impl: Any, weights: list, u: list) -> dict[str, np.ndarray]:
 
 
 @PROBES.register
-def probe_rays(impl: Any, scene: dict, origins: list, directions: list, seed: int = 0) -> dict[str, np.ndarray]:
-    """P4 on given rays (one path each)."""
+def probe_rays(impl: Any, scene: dict, origins: list, directions: list, seed: int = 0,
+               one_at_a_time: bool = False) -> dict[str, np.ndarray]:
+    """P4 on given rays (one path each), all in one call or (``one_at_a_time``) one call per ray."""
     ps = _scene(scene)
     o, d = _array(origins, (None, 3), "origins"), _array(directions, (None, 3), "directions")
-    out = STAGE.call(impl, "P4", ps, o, d, np.random.default_rng(seed))
+    rng = np.random.default_rng(seed)
+    if one_at_a_time:
+        out = np.concatenate([STAGE.call(impl, "P4", ps, o[k:k + 1], d[k:k + 1], rng) for k in range(len(o))])
+    else:
+        out = STAGE.call(impl, "P4", ps, o, d, rng)
     return {"radiance": out, **{k: np.array(v) for k, v in ps.counters.items()}}
 
 
