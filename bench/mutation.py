@@ -8,7 +8,8 @@ makes: a comparison flipped (< and <=, == and !=), an operator swapped (+ and -,
 that survives is either a gap in the tests or equivalent (no program input can tell it from the reference):
 ``bench/mutation_equivalent.json`` lists those, each with its reason. The score per stage is killed /
 (mutants − equivalent − not graded); a mutant the grader wrote no results for (a fault of the kit or the machine,
-not a verdict) is listed as not graded, never as killed. ``--quick`` grades a seeded sample of each stage's mutants.
+not a verdict) is listed as not graded, never as killed. ``--quick`` grades a seeded sample of 12 of each
+stage's mutants, ``--sample=N`` a sample of N.
 
 Changes are spliced into the source text at the AST's positions, so comments and regions stay as they are.
 """
@@ -201,11 +202,12 @@ def run(stage: str, sample: int | None = None, seed: int = 0, progress=print) ->
             "score": killed / len(counted) if counted else 1.0, "rows": rows}
 
 
-def main(output: Path, quick: bool = False, stages: list[str] | None = None) -> None:
+def main(output: Path, quick: bool = False, stages: list[str] | None = None, sample: int | None = None) -> None:
+    """``sample``: grade a seeded sample of that many mutants per stage (``quick``: 12); else every mutant."""
     from cs451.stages import stage_names
     output = Path(output)
     output.mkdir(parents=True, exist_ok=True)
-    reports = [run(s, sample=12 if quick else None) for s in (stages or stage_names())]
+    reports = [run(s, sample=sample or (12 if quick else None)) for s in (stages or stage_names())]
     print(f"\n{'stage':10s} {'mutants':>8s} {'killed':>7s} {'equiv.':>7s} {'errors':>7s} {'score':>7s}")
     for r in reports:
         print(f"{r['stage']:10s} {r['mutants']:8d} {r['killed']:7d} {r['equivalent']:7d} {r['errors']:7d} "
@@ -221,5 +223,6 @@ def main(output: Path, quick: bool = False, stages: list[str] | None = None) -> 
 
 
 if __name__ == "__main__":
+    sampled = next((int(a.split("=", 1)[1]) for a in sys.argv if a.startswith("--sample=")), None)
     main(Path(sys.argv[1] if len(sys.argv) > 1 else "bench-results"), quick="--quick" in sys.argv,
-         stages=[a for a in sys.argv[2:] if not a.startswith("-")] or None)
+         stages=[a for a in sys.argv[2:] if not a.startswith("-")] or None, sample=sampled)
