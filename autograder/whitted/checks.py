@@ -108,6 +108,22 @@ def no_gaps(out, expected, p, rays: int, triangles: int):
         return f"ray {int(i)} hits triangle {int(j)} at t = {t[i, j]:.12g}, but exactly it is at {want[i, j]:.12g}"
 
 
+def grid_hits(out, expected, p, rays: int, triangles: int):
+    """Rays straight down onto a grid whose coordinates and edge functions are exact in floating point: each ray
+    hits at least one triangle (watertight), and no triangle it passes outside of, where a test that misjudges the
+    sign of an edge function near 0 reports a hit."""
+    gap = no_gaps(out, expected, p, rays, triangles)
+    if gap:
+        return gap
+    t = output(out, "t", (rays * triangles,), "t").reshape(rays, triangles)
+    want = np.asarray(expected["t"], float).reshape(rays, triangles)
+    edge = np.asarray(expected["edge"], bool).reshape(rays, triangles)
+    phantom = np.isfinite(t) & np.isinf(want) & ~edge
+    if phantom.any():
+        i, j = np.argwhere(phantom)[0]
+        return f"ray {int(i)} hits triangle {int(j)} at t = {t[i, j]:.12g}, but it passes outside that triangle"
+
+
 # --- W4 ----------------------------------------------------------------------------------------------
 
 def _hierarchy(out, expected):

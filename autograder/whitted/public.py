@@ -124,6 +124,35 @@ def watertight_test(name, points, center, fan) -> Test:
                 expected="none", truth=truth(truths.triangle_hits), timeout=QUICK, vary=variant(variants.fan))
 
 
+def grid_edge_test(name, points, cells: int, scale: float, offset: list, clockwise: bool) -> Test:
+    """A cells × cells grid of squares in a plane z = const, each cut into two triangles wound counter-clockwise or
+    ``clockwise`` about +z, all with coordinates that are small multiples of a power of two, and rays straight down
+    through every grid point and every edge's midpoint: in floating point the edge functions there are exactly 0
+    (their sign, inside, is the winding's), where a test that counts 0 as outside for one sign leaves a gap."""
+    corner = np.asarray(offset, float)
+    def at(i, j):
+        return (corner + scale * np.array([i, j, 0.0])).tolist()
+    tris = []
+    for i in range(cells):
+        for j in range(cells):
+            for a, b, c in ((at(i, j), at(i + 1, j), at(i + 1, j + 1)), (at(i, j), at(i + 1, j + 1), at(i, j + 1))):
+                tris.append((a, c, b) if clockwise else (a, b, c))
+    targets = sorted({tuple(at(i / 2, j / 2)) for i in range(2 * cells + 1) for j in range(2 * cells + 1)})
+    o, d, v0, v1, v2 = [], [], [], [], []
+    for x in targets:
+        for a, b, c in tris:
+            o.append([x[0], x[1], x[2] + 2.0])
+            d.append([0.0, 0.0, -2.0])
+            v0.append(a), v1.append(b), v2.append(c)
+    params = {"origins": o, "directions": d, "v0": v0, "v1": v1, "v2": v2}
+    return Test(name, "W3", points, "intersect_triangle", params,
+                all_of([("no gap and no hit outside a triangle",
+                         sub(checks.grid_hits, rays=len(targets), triangles=len(tris)))]),
+                "every ray exactly on a shared edge or vertex hits at least one triangle, and none it passes outside",
+                expected="none",
+                truth=truth(truths.triangle_hits), timeout=QUICK, vary=variant(variants.grid_edges))
+
+
 BVH_CHECKS = all_of([("a valid hierarchy", sub(checks.bvh_valid)), ("node 0 is the root", sub(checks.bvh_root)),
                      ("depth", sub(checks.bvh_shallow)), ("tight boxes", sub(checks.bvh_tight))],
                     require=["a valid hierarchy"])
@@ -323,8 +352,12 @@ TESTS = [
     triangle_test("W3 intersect_triangle: hits, misses, behind, parallel", 3, **TRI_RAYS,
                   **{k: [v] * len(TRI_RAYS["origins"]) for k, v in TRI.items()}),
     triangle_test("W3 intersect_triangle: zero-area triangles are never hit", 1, edge_case=True, **ZERO_AREA),
-    watertight_test("W3 intersect_triangle: no gaps in a fan of six triangles", 3, center=[0.1, 0.2, 3],
+    watertight_test("W3 intersect_triangle: no gaps in a fan of six triangles", 1, center=[0.1, 0.2, 3],
                     fan=[[np.cos(a), np.sin(a), 0.1 * np.sin(3 * a)] for a in np.linspace(0, 2 * np.pi, 7)[:-1]]),
+    grid_edge_test("W3 intersect_triangle: rays exactly on the edges of a grid, triangles counter-clockwise", 1, 2, 0.5,
+                   [-0.5, 0.25, 1.0], False),
+    grid_edge_test("W3 intersect_triangle: rays exactly on the edges of a grid, triangles clockwise", 1, 2, 0.5,
+                   [-0.5, 0.25, 1.0], True),
     bvh_test("W4 build_bvh: 1000 random boxes", 3, lo=BOX_LO.tolist(), hi=BOX_HI.tolist()),
     bvh_test("W4 build_bvh: the spheres and polygons of the Cornell box with spheres", 2, scene=bundled("cornell-spheres")),
     depth_test("W5 closest_hit: primary visibility of the Cornell box against pyrender, 64×64", 6, CORNELL, (64, 64)),

@@ -136,9 +136,23 @@ def fan(p: dict, rng: np.random.Generator) -> Case:
     angles = np.linspace(0, 2 * np.pi, sides + 1)[:-1] + rng.uniform(-0.2, 0.2, sides)
     radius, ripple = rng.uniform(0.7, 1.3, sides), rng.uniform(0.02, 0.2)
     corners = [[float(r * np.cos(a)), float(r * np.sin(a)), float(ripple * np.sin(3 * a))] for r, a in zip(radius, angles)]
-    center = [num(rng.uniform(-0.3, 0.3)), num(rng.uniform(-0.3, 0.3)), num(rng.uniform(2.5, 3.5))]
+    side = 1.0 if p["origins"][0][2] > 0 else -1.0       # the shipped fan's side: in front, or behind (clockwise)
+    center = [num(rng.uniform(-0.3, 0.3)), num(rng.uniform(-0.3, 0.3)), num(side * rng.uniform(2.5, 3.5))]
     test = watertight_test("fresh", 1, center, corners)
     return Case(test.params, f"a fan of {sides} triangles seen from {center}", test.check)
+
+
+def grid_edges(p: dict, rng: np.random.Generator) -> Case:
+    """Another grid of squares (2 or 3 a side, 1/8 to 1/2 wide, at another offset of small multiples of 1/8), its
+    triangles wound as the shipped ones, rays exactly on its edges and vertices."""
+    from autograder.whitted.public import grid_edge_test
+    cells, scale = int(rng.integers(2, 4)), float(2.0 ** -int(rng.integers(1, 4)))   # edge functions below 1
+    offset = (rng.integers(-16, 17, 3) / 8.0).tolist()
+    a, b, c = (np.asarray(p[k][0], float) for k in ("v0", "v1", "v2"))
+    clockwise = bool(np.cross(b - a, c - a)[2] < 0)
+    test = grid_edge_test("fresh", 1, cells, scale, offset, clockwise)
+    return Case(test.params, f"a {cells} × {cells} grid {scale:g} a cell at {offset}, its triangles "
+                             f"{'clockwise' if clockwise else 'counter-clockwise'}", test.check)
 
 
 def build_bvh(p: dict, rng: np.random.Generator) -> Case:
