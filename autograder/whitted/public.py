@@ -268,8 +268,10 @@ SPHERE_RAYS = {  # hits, a miss, a tangent-ish ray, a ray from inside, a sphere 
     "directions": [[0, 0, -1], [0, 0, -2], [0, 0, -1], [1, 0, 0], [0.3, -0.4, 0.5], [0, 0, -1], [0.8, 0, -0.6]],
 }
 TRI = {"v0": [0, 0, 0], "v1": [1, 0, 0], "v2": [0, 1, 0]}
-TRI_RAYS = {"origins": [[0.2, 0.2, 1], [0.8, 0.8, 1], [0.25, 0.25, -1], [0.1, 0.1, 1], [-0.2, 0.3, 2], [0.3, 0.3, 1]],
-            "directions": [[0, 0, -1], [0, 0, -1], [0, 0, 1], [0, 0, 1], [0.1, 0, -1], [1, 0, 0]]}
+#: the last ray starts on the triangle: t = 0, a miss (a shadow or reflected ray leaving the surface it is on)
+TRI_RAYS = {"origins": [[0.2, 0.2, 1], [0.8, 0.8, 1], [0.25, 0.25, -1], [0.1, 0.1, 1], [-0.2, 0.3, 2], [0.3, 0.3, 1],
+                        [0.25, 0.5, 0]],
+            "directions": [[0, 0, -1], [0, 0, -1], [0, 0, 1], [0, 0, 1], [0.1, 0, -1], [1, 0, 0], [0, 0, -1]]}
 
 SHADE_N = 40
 _n = RNG.normal(size=(SHADE_N, 3))

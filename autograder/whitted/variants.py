@@ -102,7 +102,8 @@ def _dyadic(rng: np.random.Generator, lo: float, hi: float, shape=(), denominato
 
 def triangle_rays(p: dict, rng: np.random.Generator) -> Case:
     """A fresh triangle and the shipped case's six kinds of ray, built in exact (dyadic) arithmetic: a hit from the
-    front, a miss beside it, a hit from behind, a ray pointing away, a ray exactly through an edge, a parallel ray."""
+    front, a miss beside it, a hit from behind, a ray pointing away, a ray exactly through an edge, a parallel ray, a
+    ray that starts on the triangle (t = 0: a miss)."""
     while True:
         v0, v1, v2 = (_dyadic(rng, -2, 2, 3) for _ in range(3))
         e1, e2 = v1 - v0, v2 - v0
@@ -122,10 +123,16 @@ def triangle_rays(p: dict, rng: np.random.Generator) -> Case:
     lengths = 2.0 ** rng.integers(-1, 3, 6)
     directions = [d * k for d, k in zip(directions, lengths)]
     rays = len(origins)
+    # a ray that starts on a triangle in a plane z = c (dyadic, so t = 0 exactly in floating point too): a miss
+    c = _dyadic(rng, -2, 2, 1)[0]
+    flat = [np.array([0.0, 0.0, c]), np.array([1.0, 0.0, c]), np.array([0.0, 1.0, c])]
+    origins.append(np.array([*_dyadic(rng, 0.125, 0.375, 2, 8), c]))
+    directions.append(np.array([0.0, 0.0, float(rng.choice([-1.0, 1.0]))]))
+    corners = [[v.tolist()] * rays + [f.tolist()] for v, f in zip((v0, v1, v2), flat)]
     return Case({"origins": np.asarray(origins).tolist(), "directions": np.asarray(directions).tolist(),
-                 "v0": [v0.tolist()] * rays, "v1": [v1.tolist()] * rays, "v2": [v2.tolist()] * rays},
+                 "v0": corners[0], "v1": corners[1], "v2": corners[2]},
                 f"the triangle {v0.tolist()}, {v1.tolist()}, {v2.tolist()}: a hit from the front, a miss beside it, a hit "
-                "from behind, a ray pointing away, a ray through the edge v0-v1, a parallel ray")
+                "from behind, a ray pointing away, a ray through the edge v0-v1, a parallel ray, a ray starting on it")
 
 
 def fan(p: dict, rng: np.random.Generator) -> Case:
