@@ -250,6 +250,9 @@ def refract_mask(out, expected, p):
 def refract_directions(out, expected, p, atol: float = TOL.FLOAT64):
     want, tir = np.asarray(expected["t"], float), np.asarray(expected["tir"], bool)
     got = output(out, "t", want.shape, "the refracted directions")
+    if tir.any() and not np.all(got[tir] == 0):
+        i = int(np.flatnonzero(tir & np.any(got != 0, axis=1))[0])
+        return f"ray {i} is under total internal reflection: its row is {got[i].round(9).tolist()}, not zero"
     err = np.abs(got - want).max(axis=1)
     err[tir] = 0
     if not np.isfinite(err).all() or err.max() > atol:

@@ -371,7 +371,6 @@ def probe_refract(impl: Any, directions: list, normals: list, eta: Any) -> dict[
         t = np.zeros(0)
     if t.shape != d.shape:
         raise KitError(f"W9 refract() directions has shape {t.shape}, expected {d.shape}")
-    t = np.where(tir[:, None], 0.0, t)              # where light is reflected wholly, no direction is asked for
     return {"t": as_array(t, (len(d), 3), "W9 refract() directions"), "tir": tir}
 
 
