@@ -176,6 +176,10 @@ def roulette_thins(out, expected, p):
     n = len(p["polygons"]) * int(p["samples"])
     bound = (a + a * a + TOL.ROULETTE_SLACK) * n
     bounces = int(output(out, "bounce", (), "the bounce counter"))
+    mean = output(out, "mean", (len(p["polygons"]), 3), "the mean radiance")
+    if bounces < 1 or not np.isfinite(mean).all() or not mean.sum() > 0:
+        return (f"{bounces} bounce rays and a total mean radiance of {float(np.nansum(mean)):.3g}: paths in a lit box "
+                f"bring light, and some go on after bounce 1")
     if bounces > bound:
         return (f"{bounces} bounce rays for {n} paths in a box of albedo at most {a:g}, with the roulette from bounce "
                 f"{p['roulette_depth']}: at most {bound:.0f} expected (play the roulette from bounce "
