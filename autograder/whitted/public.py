@@ -53,9 +53,11 @@ LIGHT_BEHIND = {
 
 
 def two_mirrors(reflectance: float, min_weight: float, max_depth: int) -> dict:
-    """Two infinite parallel mirrors, the camera between them looking down: every ray bounces until cut off."""
+    """Two infinite parallel mirrors, the camera between them looking down: every ray bounces until cut off. No ray
+    escapes, so the background (blue) is never seen: a tracer whose rays miss everything shows it, and fails."""
     return {
         "camera": {"eye": [0, 0.5, 0], "center": [0, -0.5, -1], "fovy": 30},
+        "image": {"background": [0.2, 0.3, 0.5]},
         "ambient": [0.1, 0.1, 0.1],
         "lights": [{"type": "point", "position": [0, 0.5, 3]}],
         "materials": {"mirror": {"ambient": [0.1, 0.1, 0.1], "diffuse": [0, 0, 0],
