@@ -45,3 +45,17 @@ def test02_a_patch_that_shoots_for_the_first_time_has_its_row_computed_once_and_
     again, hemicubes, _ = _solve(ref, patches, white, patches.emission, known, rows)
     assert dark in again.order and dark in known
     assert again.counters["rows_requested"] == len(set(again.order) - set(first.order)) >= 1
+
+
+def test03_the_check_gives_part_marks_and_says_why_when_the_loop_itself_is_wrong():
+    """R6's check on answers a student might give: R3's order with wrong values, a wrong order, the right answer."""
+    from autograder.radiosity import checks, public, truth
+    test = next(t for t in public.TESTS if t.task == "R6")
+    p, want = test.params, truth.resolved(test.params)
+    right = {**want, "known_after": np.array(sorted(set(p["known_rows"]) | set(want["rows_asked"].tolist()))),
+             "known_rows_right": np.array(True)}
+    assert checks.solve_again_matches(right, want, p).fraction == 1.0
+    values = checks.solve_again_matches({**right, "radiosity": want["radiosity"] * 2}, want, p)
+    assert values.fraction == 0.25 and "R6 solves as R3 does" in values.message
+    order = checks.solve_again_matches({**right, "order": want["order"][::-1]}, want, p)
+    assert order.fraction == 0.0 and "shot order differs" in order.message

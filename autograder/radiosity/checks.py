@@ -106,7 +106,7 @@ def solve_again_matches(out, expected, p) -> Verdict:
     """R6: R3's result, computing only the rows not known (each once, none known again), and keeping them."""
     wrong = _same_loop(out, expected, p)
     if wrong:
-        return Verdict(wrong.score * 0.5, f"{wrong.message} (R6 solves as R3 does)")
+        return Verdict(wrong.fraction * 0.5, f"{wrong.message} (R6 solves as R3 does)")
     want = [int(i) for i in np.asarray(expected["rows_asked"]).ravel()]
     asked = [int(i) for i in output(out, "rows_asked", (None,), "rows_asked")]
     if asked != want:
