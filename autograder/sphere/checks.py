@@ -127,3 +127,21 @@ def key_press(out, expected, p, index: int):
             wrong.append(f"{field}={got[index].item()!r}, expected {want!r}")
     if wrong:
         return f"key {key!r} from {state}: " + ", ".join(wrong)
+
+
+def stereo_zero_parallax(out, expected, p):
+    """Points on the convergence plane land on the same spot in both eyes' images; the eyes sit ∓separation/2
+    along x, so a point's x in an eye's view space is its cyclops x minus the eye's offset (handout §S9)."""
+    pair = output(out, "matrices", (2, 4, 4), "the two matrices")
+    rng = np.random.default_rng(0)
+    depth = float(p["convergence"])
+    points = np.c_[rng.uniform(-1, 1, (16, 2)) * depth, np.full(16, -depth), np.ones(16)]
+    ndc = []
+    for matrix, eye in zip(pair, (-1, 1)):
+        seen = points - [eye * float(p["separation"]) / 2, 0, 0, 0]
+        clip = seen @ matrix.T
+        ndc.append(clip[:, :2] / clip[:, 3:])
+    worst = float(np.abs(ndc[0] - ndc[1]).max())
+    if not worst <= TOL.MATRIX_RTOL:
+        return (f"a point on the convergence plane lands {worst:.3g} apart (NDC) in the two images: each eye's "
+                "window must be slid so that both meet there")

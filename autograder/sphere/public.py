@@ -39,6 +39,19 @@ def scene_variant(**changes) -> dict:
     return scene
 
 
+def stereo_test(name, points, **params) -> Test:
+    return Test(name, "S9", points, "stereo_projection", params, array_close("matrices", what="the two matrices", **MATRIX),
+                MATRIX_TOL, expected="none", truth=truth(truths.stereo_pair), timeout=QUICK,
+                vary=variant(variants.stereo_pair))
+
+
+def parallax_test(name, points, **params) -> Test:
+    return Test(name, "S9", points, "stereo_projection", params,
+                all_of([("zero parallax on the convergence plane", sub(checks.stereo_zero_parallax))]),
+                f"both images of a point on the convergence plane within {TOL.MATRIX_RTOL} (NDC)",
+                expected="none", timeout=QUICK, vary=variant(variants.stereo_pair))
+
+
 def perspective_test(name, points, **params) -> Test:
     return Test(name, "S1", points, "perspective", params, array_close("matrix", what="the matrix", **MATRIX),
                 MATRIX_TOL, expected="none", truth=truth(truths.perspective), timeout=QUICK,
@@ -180,4 +193,8 @@ TESTS = [
     keys_test("S8 handle_key: + and - stop at 256 and 4", 3,
               [["+", START], ["+", {**START, "slices": 256, "stacks": 256}], ["-", START],
                ["-", {**START, "slices": 4, "stacks": 4}]]),
+    stereo_test("S9 stereo_projection (optional): both eyes against pyrender's off-centre camera", 3, fovy=40,
+                aspect=1.5, near=0.5, far=50, separation=0.3, convergence=4.0),
+    parallax_test("S9 stereo_projection (optional): the two images agree on the convergence plane", 2, fovy=60,
+                  aspect=1.0, near=1.0, far=100, separation=0.065, convergence=2.5),
 ]

@@ -22,6 +22,20 @@ def perspective(params: dict) -> np.ndarray:
     return cam.get_projection_matrix(1, 1)
 
 
+def stereo_pair(params: dict) -> dict[str, np.ndarray]:
+    """Both eyes' matrices as pyrender's camera of given intrinsics builds them: the same focal lengths as the
+    cyclops camera, its principal point slid by the eye's offset seen on the convergence plane (a 2 × 2 image)."""
+    t = np.tan(np.radians(params["fovy"]) / 2)
+    half_width = params["aspect"] * params["near"] * t
+    out = []
+    for eye in (-1, 1):
+        shift = eye * params["separation"] / 2 * params["near"] / params["convergence"]
+        cam = pyrender.IntrinsicsCamera(1 / (params["aspect"] * t), 1 / t, 1 + shift / half_width, 1.0,
+                                        znear=params["near"], zfar=params["far"])
+        out.append(cam.get_projection_matrix(2, 2))
+    return {"value": np.array(out)}
+
+
 def look_at(params: dict) -> np.ndarray:
     """The inverse of the camera-to-world pose whose -z axis looks from eye to center (pyrender's convention)."""
     eye, center, up = (np.asarray(params[k], dtype=float) for k in ("eye", "center", "up"))

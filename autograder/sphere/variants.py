@@ -141,3 +141,14 @@ def handle_key(p: dict, rng: np.random.Generator) -> Case:
         presses.append([key, fresh if changed == was else dict(state)])
     shown = "; ".join(f"{k!r} on {s['slices']}×{s['stacks']} {s['shading']}" for k, s in presses)
     return Case({"presses": presses}, shown)
+
+
+def stereo_pair(p: dict, rng: np.random.Generator) -> Case:
+    """Another field of view, window, eye separation and convergence distance."""
+    fovy, aspect, near = num(rng.uniform(20, 75), 3), num(rng.uniform(1.0, 2.4)), num(rng.uniform(0.1, 2))
+    far, separation = num(near * rng.uniform(10, 200), 3), num(rng.uniform(0.03, 0.5))
+    convergence = num(near * rng.uniform(2, 10))
+    return Case({"fovy": fovy, "aspect": aspect, "near": near, "far": far, "separation": separation,
+                 "convergence": convergence},
+                f"fovy {fovy:g}°, aspect {aspect:g}, near {near:g}, far {far:g}, separation {separation:g}, "
+                f"convergence {convergence:g}")

@@ -269,3 +269,36 @@ def counter(out, expected, p, key: str, per_pixel: int | None = None, at_least_o
         return f"{key} = {got} for {n} pixels, expected some"
     if per_pixel is not None and got != per_pixel * n:
         return f"{key} = {got} for {n} pixels, expected {per_pixel * n}"
+
+
+def _lens(out, p):
+    n = len(np.asarray(p["directions"], float))
+    return output(out, "origins", (n, 3), "origins"), output(out, "directions", (n, 3), "directions")
+
+
+def lens_rays_match(out, expected, p):
+    """Each lens ray's origin and direction as the handout's mapping of ``u`` gives them (handout §W12)."""
+    bad = []
+    for key, got in zip(("origins", "directions"), _lens(out, p)):
+        err = np.abs(got - np.asarray(expected[key], float)).max(axis=1)
+        bad += [f"ray {k}: {key[:-1]} {np.round(got[k], 6).tolist()}, expected "
+                f"{np.round(np.asarray(expected[key], float)[k], 6).tolist()}" for k in np.flatnonzero(~(err <= TOL.FLOAT64))]
+    return _few(bad)
+
+
+def lens_rays_focus(out, expected, p):
+    """Every ray starts on the lens disc (the plane through the eye across the view axis) and passes through the
+    point where its pinhole ray meets the plane of focus, with a unit direction: what makes that plane sharp."""
+    origins, directions = _lens(out, p)
+    eye, center = (np.asarray(p["camera"][k], float) for k in ("eye", "center"))
+    forward = (center - eye) / np.linalg.norm(center - eye)
+    pinhole = np.asarray(p["directions"], float)
+    sharp = eye + pinhole * (float(p["focus"]) / (pinhole @ forward))[:, None]
+    lens = origins - eye
+    off_disc = (np.abs(lens @ forward) > TOL.FLOAT64) | (np.linalg.norm(lens, axis=1) > float(p["aperture"]) + TOL.FLOAT64)
+    miss = np.linalg.norm(np.cross(sharp - origins, directions), axis=1)   # distance of the line from the sharp point
+    bad = [f"ray {k} starts at {np.round(origins[k], 6).tolist()}, off the lens disc" for k in np.flatnonzero(off_disc)]
+    bad += [f"ray {k} is not a unit vector" for k in np.flatnonzero(np.abs(np.linalg.norm(directions, axis=1) - 1) > TOL.FLOAT64)]
+    bad += [f"ray {k} passes {miss[k]:.3g} from its pinhole ray's point on the plane of focus"
+            for k in np.flatnonzero(~(miss <= TOL.FLOAT64 * max(1.0, float(p["focus"]))))]
+    return _few(bad)

@@ -87,6 +87,13 @@ def camera_test(name, points, **params) -> Test:
                 expected="none", truth=truth(truths.camera), timeout=QUICK, vary=variant(variants.camera))
 
 
+def lens_test(name, points, **params) -> Test:
+    parts = [("the lens sample and the aim of each ray", sub(checks.lens_rays_match)),
+             ("from the lens disc through the plane of focus", sub(checks.lens_rays_focus))]
+    return Test(name, "W12", points, "thin_lens", params, all_of(parts), f"origins and directions within {TOL.FLOAT64}",
+                expected="none", truth=truth(truths.thin_lens), timeout=QUICK, vary=variant(variants.thin_lens))
+
+
 def sphere_test(name, points, **params) -> Test:
     return Test(name, "W2", points, "intersect_sphere", params,
                 all_of([("both roots, smaller first, inf on a miss", sub(checks.sphere_roots))]),
@@ -345,6 +352,12 @@ CHECKER_SEGMENTS = {"origins": np.c_[_x[:, 0], np.full(16, -1.0), _x[:, 1]].toli
 _d = np.asarray(_unit(MORE.normal(size=(20, 3))))
 REFLECT = {"directions": _d.tolist(), "normals": _unit(-_d + MORE.normal(size=(20, 3)) * 0.4)}
 
+_lens_rng = np.random.default_rng(451)   # its own stream: the data above stays as it was
+LENS_RAYS = _unit(_lens_rng.uniform(-0.3, 0.3, (20, 3)) + [0, 0, -1])
+LENS_OBLIQUE = _unit(_lens_rng.uniform(-0.3, 0.3, (20, 3)) + np.subtract([0, 0, 0], [3, 2, 6]) / 7)
+LENS_U = _lens_rng.random((20, 2)).tolist()
+
+
 TESTS = [
     camera_test("W1 camera_rays: the Whitted scene's camera, 8×6", 4, camera=WHITTED["camera"], width=8, height=6),
     camera_test("W1 camera_rays: a rolled camera (up not perpendicular to the view), 5×7, fovy 60°", 2,
@@ -386,4 +399,10 @@ TESTS = [
                  (16, 12), {"camera": 1, "reflection": mirror_rays(0.5, 0.1, 10), "transmission": 0}),
     counter_test("W11 trace: the depth limit between two mirrors (r = 0.9, cut-off 0.01, depth 3)", 1,
                  two_mirrors(0.9, 0.01, 3), (12, 8), {"camera": 1, "reflection": mirror_rays(0.9, 0.01, 3)}),
+    lens_test("W12 thin_lens (optional): a camera on the z axis, lens radius 0.1, focused at 5", 3,
+              camera={"eye": [0, 0, 5], "center": [0, 0, 0], "up": [0, 1, 0], "fovy": 40}, directions=LENS_RAYS,
+              aperture=0.1, focus=5.0, u=LENS_U),
+    lens_test("W12 thin_lens (optional): an oblique camera, a wide lens focused far", 2,
+              camera={"eye": [3, 2, 6], "center": [0, 0, 0], "up": [0, 1, 0], "fovy": 30}, directions=LENS_OBLIQUE,
+              aperture=0.5, focus=12.0, u=LENS_U),
 ]

@@ -34,6 +34,21 @@ def _camera_pose(camera: dict) -> np.ndarray:
     return pose
 
 
+def thin_lens(p: dict) -> dict[str, np.ndarray]:
+    """W12 in the camera's own frame (x right, y up, z backwards: pyrender's pose): the lens point (r cos φ, r sin φ, 0)
+    and the pinhole ray scaled to depth −focus, then both turned into the world by the pose."""
+    pose = _camera_pose(p["camera"])
+    turn = pose[:3, :3]
+    local = np.asarray(p["directions"], float) @ turn                        # the pinhole rays in camera space
+    sharp = local * (float(p["focus"]) / -local[:, 2])[:, None]
+    u = np.asarray(p["u"], float)
+    radius = float(p["aperture"]) * np.sqrt(u[:, 0])
+    lens = np.c_[radius * np.cos(2 * np.pi * u[:, 1]), radius * np.sin(2 * np.pi * u[:, 1]), np.zeros(len(u))]
+    aim = sharp - lens
+    aim /= np.linalg.norm(aim, axis=1, keepdims=True)
+    return {"origins": lens @ turn.T + pose[:3, 3], "directions": aim @ turn.T}
+
+
 # --- W1 ------------------------------------------------------------------------------------
 
 def camera(params: dict) -> dict[str, np.ndarray]:

@@ -323,3 +323,18 @@ def counters(p: dict, rng: np.random.Generator, expect: dict) -> Case:
     test = counter_test("fresh", 1, two_mirrors(r, cut, depth), p["size"], fresh)
     return Case(test.params, f"mirrors of reflectance {r:g}, cut-off {cut:g}, depth {depth}: "
                              f"{fresh['reflection']} reflection rays per pixel", test.check)
+
+
+def thin_lens(p: dict, rng: np.random.Generator) -> Case:
+    """A fresh camera, fresh pinhole rays inside its view, a fresh lens and plane of focus, fresh lens samples."""
+    eye = np.round(rng.uniform(-6, 6, 3), 4)
+    center = np.round(eye + rng.normal(size=3) * 3, 4)
+    camera = {**p["camera"], "eye": eye.tolist(), "center": center.tolist(), "up": [0, 1, 0]}
+    forward = (center - eye) / np.linalg.norm(center - eye)
+    n = len(p["directions"])
+    d = forward + rng.uniform(-0.4, 0.4, (n, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    aperture, focus = round(float(rng.uniform(0.02, 0.5)), 4), round(float(rng.uniform(1, 20)), 4)
+    return Case({**p, "camera": camera, "directions": np.round(d, 12).tolist(), "aperture": aperture, "focus": focus,
+                 "u": np.round(rng.random((n, 2)), 12).tolist()},
+                f"{n} rays of a camera at {eye.tolist()}, lens radius {aperture:g}, focused at {focus:g}")

@@ -110,11 +110,12 @@ def load_tests(stage: str, include_hidden: bool = True, secret: str | None = Non
     if unknown:
         raise KitError(f"autograder/{stage}: tests name unknown tasks {unknown}")
     tests.sort(key=lambda t: (order.index(t.task), t.hidden))
+    optional = {t.id for t in get_stage(stage).tasks if t.optional}
     counts: dict[str, int] = {}
     numbered = []
     for t in tests:
         counts[t.task] = counts.get(t.task, 0) + 1
-        numbered.append(replace(t, number=f"{t.task}.{counts[t.task]}"))
+        numbered.append(replace(t, number=f"{t.task}.{counts[t.task]}", extension=t.task in optional))
     return numbered
 
 

@@ -65,6 +65,13 @@ def hidden_note(result: GradeResult, show_hidden: bool = False) -> str:
             "they check the same tasks on other scenes, sizes and parameters.")
 
 
+def extension_line(result: GradeResult) -> str:
+    """One line for the optional extension's tests, which stay out of the grade."""
+    tasks = sorted({r.test.task for r in result.extensions})
+    return (f"optional extension {', '.join(tasks)}: {result.extension_score:g} / {result.extension_max:g} "
+            "(not part of the grade)")
+
+
 def figures(images: dict[str, np.ndarray]) -> list[dict]:
     """The pictures of one test in the report's order, with the FLIP map where both renders are there."""
     images = dict(images)
@@ -87,7 +94,7 @@ def figures(images: dict[str, np.ndarray]) -> list[dict]:
 def _row(r) -> dict:
     status, word = _status(r)
     return {"number": r.test.number, "name": printable(r.test.name), "score": r.score, "points": r.test.points,
-            "status": status, "word": word, "hidden": r.test.hidden, "tolerance": r.test.tolerance,
+            "status": status, "word": word, "hidden": r.test.hidden, "extension": r.test.extension, "tolerance": r.test.tolerance,
             "message": printable(r.verdict.message), "output": r.output.strip() and printable(r.output)}
 
 
@@ -98,15 +105,16 @@ def render_report(result: GradeResult, show_hidden: bool = True) -> str:
     shown = [r for r in result.results if show_hidden or not r.test.hidden]
     failed = [dict(_row(r), figures=figures(r.verdict.images)) for r in shown if not r.verdict.passed]
     passed = [dict(_row(r), figures=figures(r.verdict.images)) for r in shown if r.verdict.passed]
-    visible = [r for r in shown if not r.test.hidden]
-    held = [r for r in shown if r.test.hidden]
+    visible = [r for r in shown if not r.test.hidden and not r.test.extension]
+    held = [r for r in shown if r.test.hidden and not r.test.extension]
     held_back = not show_hidden and any(r.test.hidden for r in result.results)   # its time counts the hidden tests
     return _env.get_template("report.html.j2").render(
         stage=result.stage, submission=printable(result.submission, lines=False),
         seconds=None if held_back else result.seconds, isolation=printable(result.isolation),
         score=sum(r.score for r in visible), total=sum(r.test.points for r in visible),
         hidden_score=sum(r.score for r in held), hidden_total=sum(r.test.points for r in held),
-        hidden_note=hidden_note(result, show_hidden), problems=[printable(p) for p in result.problems],
+        hidden_note=hidden_note(result, show_hidden),
+        extension_note=extension_line(result) if result.extensions else "", problems=[printable(p) for p in result.problems],
         rows=[_row(r) for r in shown],
         failed=failed, passed=passed)
 

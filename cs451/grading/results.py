@@ -30,10 +30,14 @@ def to_gradescope(result: GradeResult) -> dict[str, Any]:
         output = r.verdict.message
         if r.output.strip():
             output += "\n\nYour code printed:\n" + r.output.strip()[:MAX_PRINTED]
-        tests.append({"score": r.score, "max_score": t.points, "status": "passed" if r.verdict.passed else "failed",
-                      "name": printable(t.name, lines=False), "number": t.number, "output": printable(output),
-                      "output_format": "text",
-                      "tags": [t.task], "visibility": t.visibility})
+        entry = {"score": r.score, "max_score": t.points, "status": "passed" if r.verdict.passed else "failed",
+                 "name": printable(t.name, lines=False), "number": t.number, "output": printable(output),
+                 "output_format": "text", "tags": [t.task], "visibility": t.visibility}
+        if t.extension:   # shown, never added to the grade: its points travel in extra_data
+            entry.update(score=0.0, max_score=0.0, name=f"[optional extension] {entry['name']}",
+                         output=f"Optional extension, not part of the grade: {r.score:g} / {t.points:g}.\n\n" + entry["output"],
+                         extra_data={"extension": True, "score": r.score, "max_score": t.points})
+        tests.append(entry)
     data: dict[str, Any] = {"output": _summary_html(result), "output_format": "html",
                             "visibility": "visible", "stdout_visibility": "hidden", "tests": tests}
     if not any(r.test.hidden for r in result.results):
@@ -56,19 +60,21 @@ THUMBNAIL = 160
 
 def _summary_html(result: GradeResult) -> str:
     from PIL import Image as PILImage
-    from .report import _png_data_uri, hidden_note
+    from .report import _png_data_uri, extension_line, hidden_note
     def esc(text: object) -> str:
         return html.escape(printable(text))
-    visible = [r for r in result.results if not r.test.hidden]
+    visible = [r for r in result.graded if not r.test.hidden]
     score, total = sum(r.score for r in visible), sum(r.test.points for r in visible)
     parts = [f"<p><b>{score:g} / {total:g} points</b> on the tests you can see now.</p>"]
+    if result.extensions:
+        parts.append(f"<p>{esc(extension_line(result))}</p>")
     note = hidden_note(result, show_hidden=False)
     if note:
         parts.append(f"<p>{esc(note)}</p>")
     if result.problems:
         parts.append("<p>Problems found before testing:</p><ul>" +
                      "".join(f"<li>{esc(p)}</li>" for p in result.problems) + "</ul>")
-    for r in visible:
+    for r in visible + result.extensions:
         if r.verdict.passed or not r.verdict.images:
             continue
         parts.append(f"<p>{esc(r.test.number)} {esc(r.test.name)}: {esc(r.verdict.message)}</p><p>")
@@ -99,16 +105,16 @@ def format_table(result: GradeResult, width: int = 100) -> str:
     for r in result.results:
         t = r.test
         mark = "ok" if r.verdict.passed else ("part" if r.score > 0 else "FAIL")
-        hidden = " [hidden]" if t.hidden else ""
+        hidden = " [hidden]" if t.hidden else (" [optional]" if t.extension else "")
         lines.append(f"{t.number:<7} {r.score:>5g} / {t.points:<3g}  {mark:4} {printable(t.name, lines=False)}{hidden}")
         if not r.verdict.passed:
             lines += textwrap.wrap(printable(r.verdict.message, lines=False), width, initial_indent=indent,
                                    subsequent_indent=indent, break_long_words=True, break_on_hyphens=False)
     lines.append("-" * width)
-    visible = [r for r in result.results if not r.test.hidden]
-    held = len(visible) < len(result.results)
+    visible = [r for r in result.graded if not r.test.hidden]
+    held = len(visible) < len(result.graded)
     by_task: dict[str, list[float]] = {}
-    for r in visible:
+    for r in visible + [r for r in result.extensions if not r.test.hidden]:
         acc = by_task.setdefault(r.test.task, [0.0, 0.0])
         acc[0] += r.score
         acc[1] += r.test.points
@@ -117,6 +123,9 @@ def format_table(result: GradeResult, width: int = 100) -> str:
     seconds = f"   ({result.seconds:.1f} s)"
     lines.append(f"total: {sum(r.score for r in visible):g} / {sum(r.test.points for r in visible):g}"
                  + (" on the visible tests" if held else seconds))
+    if result.extensions:
+        from .report import extension_line
+        lines.append(extension_line(result))
     if held:   # the time too counts the hidden tests
         lines.append(f"total with the hidden tests: {result.score:g} / {result.max_score:g}{seconds} "
                      "(a student sees it once grades are published)")

@@ -65,7 +65,7 @@ def grade_roster(*, stage: str, roster: str | Path, output: str | Path, include_
         bar.close()
     path = output / "gradebook.csv"
     with open(path, "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=["student", "score", "max_score", *tasks, "seconds", "problems"])
+        writer = csv.DictWriter(f, fieldnames=["student", "score", "max_score", *tasks, "extension", "seconds", "problems"])
         writer.writeheader()
         for name in sorted(rows):
             writer.writerow({k: spreadsheet_safe(v) for k, v in rows[name].items()})
@@ -105,5 +105,6 @@ def _row(name: str, result: GradeResult, tasks: list[str]) -> dict:
     for r in result.results:
         per_task[r.test.task] += r.score
     return {"student": name, "score": round(result.score, 2), "max_score": result.max_score,
-            **{k: round(v, 2) for k, v in per_task.items()}, "seconds": round(result.seconds, 1),
+            **{k: round(v, 2) for k, v in per_task.items()}, "extension": round(result.extension_score, 2),
+            "seconds": round(result.seconds, 1),
             "problems": "; ".join(result.problems)}

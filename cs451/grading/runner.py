@@ -84,12 +84,29 @@ class GradeResult:
     hidden_not_run: dict[str, Any] = field(default_factory=dict)  # hidden_summary() when only public tests ran
 
     @property
+    def graded(self) -> list[TestResult]:
+        """The tests that make the grade: every test but those of optional extensions."""
+        return [r for r in self.results if not r.test.extension]
+
+    @property
+    def extensions(self) -> list[TestResult]:
+        return [r for r in self.results if r.test.extension]
+
+    @property
     def score(self) -> float:
-        return sum(r.score for r in self.results)
+        return sum(r.score for r in self.graded)
 
     @property
     def max_score(self) -> float:
-        return sum(r.test.points for r in self.results)
+        return sum(r.test.points for r in self.graded)
+
+    @property
+    def extension_score(self) -> float:
+        return sum(r.score for r in self.extensions)
+
+    @property
+    def extension_max(self) -> float:
+        return sum(r.test.points for r in self.extensions)
 
 
 def _judge(test: Test, outputs: Outputs, expected: Outputs) -> Verdict:

@@ -160,6 +160,8 @@ class Test:
     depends_on: tuple[str, ...] = ()
     #: a public test's variant (:func:`variant`): the fresh case the instructor's kit grades instead of this one
     vary: Ref | None = None
+    #: set by the loader: the test grades an optional extension, whose points stay out of the grade
+    extension: bool = False
 
     @property
     def visibility(self) -> str:

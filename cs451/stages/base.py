@@ -47,6 +47,9 @@ class Task:
     title: str          # "Perspective projection"
     params: tuple[str, ...]  # expected parameter names, checked when a submission loads
     returns: tuple[Out, ...] = ()   # one Out: a single value; several: a tuple of them
+    #: an optional extension: its tests are graded and reported, but their points stay out of the grade (a
+    #: submission may leave the function out)
+    optional: bool = False
 
     @property
     def label(self) -> str:
@@ -264,6 +267,8 @@ def check_interface(stage: Stage, module: ModuleType) -> list[str]:
     problems = []
     for task in stage.tasks:
         fn = getattr(module, task.function, None)
+        if fn is None and task.optional:
+            continue
         if fn is None:
             problems.append(f"{task.id}: missing function {task.function}()")
             continue
@@ -283,6 +288,8 @@ def student_call(stage: Stage, module: Any, task_id: str, *args: Any) -> Any:
     """Call a task's function, turning an unimplemented stub into a one-line KitError."""
     task = stage.task(task_id)
     if getattr(module, task.function, None) is None:
+        if task.optional:
+            raise KitError(f"{task.id} {task.function}() is an optional extension this submission does not attempt")
         raise KitError(f"{task.id} {task.function}() is missing from the submission")
     try:
         with stage.accelerated(module):

@@ -6,12 +6,14 @@ The kit imports this package and calls only the names below (see
 from .bvh import build_bvh, closest_hit
 from .camera import camera_rays
 from .intersect import intersect_sphere, intersect_triangle
+from .lens import thin_lens
 from .optics import fresnel, reflect, refract
 from .shading import local_shading, shadow_transmission
 from .tracer import trace
 
 __all__ = ["camera_rays", "intersect_sphere", "intersect_triangle", "build_bvh", "closest_hit", "local_shading",
-           "shadow_transmission", "reflect", "refract", "fresnel", "trace"]
+           "shadow_transmission", "reflect", "refract", "fresnel", "trace",
+           "thin_lens"]
 # BEGIN SOLUTION
 #: The one hook for speed: the kit runs this package's large batches of W1, W4, W5, W7 and W11 through the
 #: instructor's compiled kernels (cs451/stages/whitted/accel/, in no release or sandbox), which give the same

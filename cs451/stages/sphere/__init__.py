@@ -60,6 +60,8 @@ TASKS = (
     Task("S7", "reshape", "Resizing the window", ("width", "height", "camera"),
          (Out("viewport", (4,), "i"), Out("projection", (4, 4)))),
     Task("S8", "handle_key", "Keyboard controls", ("key", "state"), (Out("state", kind="any"),)),
+    Task("S9", "stereo_projection", "A stereo pair",
+         ("fovy", "aspect", "near", "far", "separation", "convergence", "eye"), (Out("matrix", (4, 4)),), optional=True),
 )
 
 
@@ -268,6 +270,14 @@ PROBES = Probes()
 @PROBES.register
 def probe_perspective(impl: Any, fovy: float, aspect: float, near: float, far: float) -> dict[str, np.ndarray]:
     return {"matrix": _perspective(impl, fovy, aspect, near, far)}
+
+
+@PROBES.register
+def probe_stereo_projection(impl: Any, fovy: float, aspect: float, near: float, far: float, separation: float,
+                            convergence: float) -> dict[str, np.ndarray]:
+    """S9 for both eyes: the left eye's matrix, then the right's."""
+    return {"matrices": np.stack([STAGE.call(impl, "S9", fovy, aspect, near, far, separation, convergence, eye)
+                                  for eye in (-1, 1)])}
 
 
 @PROBES.register

@@ -8,7 +8,6 @@ Everything a student writes is called through :data:`STAGE`, and checked.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Any, Callable
 
 import numpy as np
@@ -16,9 +15,10 @@ import numpy as np
 from ... import tracescene, schema
 from ...errors import KitError
 from ...scene import AreaLight, Camera, Mesh, Plane, PointLight, Polygon, Scene, Sphere, parse_scene
-from ...schema import Context, field
+from ...schema import Context
 from ..base import Out, Probes, Stage, Task, as_array, functions_replaced, part
 from . import tolerances
+from .options import MAX_DEPTH, WhittedOptions
 
 RAYS = "len(origins)"
 TASKS = (
@@ -40,28 +40,11 @@ TASKS = (
     Task("W10", "fresnel", "Fresnel reflectance", ("cos_i", "eta"), (Out("f", ("len(cos_i)",)),)),
     Task("W11", "trace", "Recursive tracing and the cut-off", ("scene", "origins", "directions"),
          (Out("colour", (RAYS, 3)),)),
+    Task("W12", "thin_lens", "Depth of field", ("camera", "directions", "aperture", "focus", "u"),
+         (Out("origins", ("len(directions)", 3)), Out("directions", ("len(directions)", 3))), optional=True),
 )
 
 
-@dataclass(frozen=True)
-class WhittedOptions:
-    max_depth: int = field("Most bounces (reflections and refractions) after the camera ray.", 5, schema.at_least(0))
-    min_weight: float = field("The cut-off: a ray whose weight β (max over RGB) falls below this is not cast.", 0.01,
-                              schema.non_negative)
-    spp: int = field("Samples per pixel on a regular grid (1, 4, 9, 16, …: a square).", 1, schema.positive)
-    light_samples: int = field("Shadow rays per area light and shading point, overriding each light's `samples` (0: keep).",
-                               0, schema.non_negative)
-
-    def validate(self, ctx: Context) -> None:
-        if math.isqrt(self.spp) ** 2 != self.spp:
-            raise ctx.child("spp").error(f"must be a square number (1, 4, 9, 16, …), got {self.spp}")
-        if self.max_depth > MAX_DEPTH:
-            raise ctx.child("max_depth").error(f"must be at most {MAX_DEPTH} (each bounce is a pass over every ray "
-                                               f"still alive), got {self.max_depth}")
-
-
-#: the deepest recursion a scene may ask for
-MAX_DEPTH = 64
 #: bytes per camera ray of a frame (its sub-pixel samples included), measured on the reference: 100-110 at
 #: 320 × 240 with 16 and 64 samples per pixel; with margin
 RAY_BYTES = 160
@@ -247,6 +230,15 @@ def probe_camera_rays(impl: Any, camera: dict, width: int, height: int) -> dict[
     cam = schema.parse_record(Camera, camera, Context("<probe>", "camera"))
     origins, directions = _camera_rays(impl, cam, width, height)
     return {"origins": origins, "directions": directions}
+
+
+@PROBES.register
+def probe_thin_lens(impl: Any, camera: dict, directions: list, aperture: float, focus: float, u: list
+                    ) -> dict[str, np.ndarray]:
+    cam = schema.parse_record(Camera, camera, Context("<probe>", "camera"))
+    d = _rays(directions, "directions")
+    origins, out = STAGE.call(impl, "W12", cam, d, float(aperture), float(focus), as_array(u, (len(d), 2), "u"))
+    return {"origins": origins, "directions": out}
 
 
 @PROBES.register

@@ -18,4 +18,5 @@ NOTHING = {
     'W9': 'd = np.asarray(directions, float)\n    return d, np.zeros(len(d), bool)',
     'W10': 'return np.zeros(np.shape(cos_i))',
     'W11': "scene.counters['camera'] += len(origins)\n    return np.zeros((len(origins), 3))",
+    'W12': 'return np.zeros((len(directions), 3)), np.asarray(directions, float)',
 }

@@ -1,0 +1,18 @@
+"""S9, an optional extension: the two projections of a stereo pair (handout §S9).
+
+Each eye keeps the cyclops camera's axis (parallel axes: no toe-in, so no vertical parallax) and
+looks through its own off-axis frustum, sheared so that both frusta share one window on the plane
+at the convergence distance. Objects on that plane appear at the same place in both images.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def stereo_projection(fovy: float, aspect: float, near: float, far: float, separation: float, convergence: float,
+                      eye: int) -> np.ndarray:
+    """glFrustum's matrix (4, 4) for one eye of a parallel-axis stereo pair: ``eye`` −1 (left) or +1 (right) sits
+    ``eye·separation/2`` along the camera's x axis; both frusta meet the cyclops frustum on the plane at distance
+    ``convergence``. ``separation`` 0 gives gluPerspective's matrix."""
+    # TODO S9: the cyclops window at the near plane, slid against the eye's offset (handout §S9)
+    raise NotImplementedError("S9: the cyclops window at the near plane, slid against the eye's offset (handout §S9)")
