@@ -357,19 +357,18 @@ def test19_every_solver_option_solves_the_same_equations(cornell_rows):
                                                    * rows.counters["blind_rows_resampled"])
 
 
-def test_the_papers_order_in_the_bench_converges_to_the_same_answer_as_the_notes_sweeps():
-    """bench/shooting_orders.py (always the current maximum, 1988) against the reference's sweeps (notes §2.5)."""
+def test_the_papers_order_converges_to_the_same_answer_as_the_notes_sweeps():
+    """The reference's R7 (always the current maximum, 1988; the bench's other order) against its sweeps (notes §2.5)."""
     import numpy as np
 
     from autograder.radiosity.public import SIX
-    from bench.shooting_orders import always_the_maximum
     from cs451 import KIT_ROOT
     from cs451.impl import load_impl
     ref = load_impl(KIT_ROOT / "reference" / "radiosity", "radiosity")
     F = np.array(SIX["F"])
     args = (lambda i: F[i], np.array(SIX["areas"]), np.array(SIX["reflectance"]), np.array(SIX["emission"]))
     B_sweeps, _, sweeps = ref.progressive_refinement(*args, 1e-9, 100_000, 1.0, None)
-    B_max, _, maximum = always_the_maximum(*args, 1e-9, 100_000, 1.0, None)
+    B_max, _, maximum = ref.shoot_largest_first(*args, 1e-9, 100_000, 1.0, None)
     np.testing.assert_allclose(B_max, B_sweeps, rtol=1e-7)
     assert sweeps[:4] == maximum[:4] and sweeps[4] != maximum[4]   # where the two orders part ways
     B_direct = np.column_stack([np.linalg.solve(np.eye(len(F)) - args[2][:, c:c + 1] * F, args[3][:, c])

@@ -44,6 +44,14 @@ def tables_test(name, points, resolution) -> Test:
                 truth=truth(truths.tables), timeout=QUICK, vary=variant(variants.tables))
 
 
+def tetrahedron_test(name, points, resolution) -> Test:
+    return Test(name, "H7", points, "tetrahedron", {"resolution": resolution},
+                all_of([("the face", sub(checks.table_cells, key="face")), ("three faces sum to 1", sub(checks.tetrahedron_sum))],
+                       earn_with=["the face"]),
+                f"each cell within {TOL.FLOAT64_RTOL} relative of cos θ·cos θ'/(πr²)·ΔA; three faces sum to 1 within 0.25/r²",
+                expected="none", truth=truth(truths.tetrahedron_face), timeout=QUICK, vary=variant(variants.tetrahedron))
+
+
 def views_test(name, points, center, normal, up) -> Test:
     return Test(name, "H2", points, "views", {"center": center, "normal": normal, "up": up},
                 array_close("views", **FLOAT64, what="the five view matrices", plural=True),
@@ -160,4 +168,6 @@ TESTS = [
                    truths.opposed_squares(1.0, 1.0), 0, [[1]], [truths.howell_c11(1, 1, 1)], TOL.KNOWN_ROW),
     known_row_test("H6 proximity fix: unit squares at right angles (Howell C-14, F = 0.20004)", "H6", 3,
                    truths.perpendicular_squares(1.0, 1.0), 0, [[1]], [truths.howell_c14(1, 1, 1)], TOL.KNOWN_ROW),
+    tetrahedron_test("H7 cubic tetrahedron (optional): resolution 8", 3, 8),
+    tetrahedron_test("H7 cubic tetrahedron (optional): resolution 64", 2, 64),
 ]

@@ -158,6 +158,23 @@ def tables(params: dict) -> dict[str, np.ndarray]:
     return {"top": delta_top(params["resolution"]), "side": delta_side(params["resolution"])}
 
 
+def tetrahedron_face(params: dict) -> dict[str, np.ndarray]:
+    """H7 by its definition, in vectors: for each cell centre d = (x, y, 1) on the face, cos θ at the patch (against
+    the normal (1, 1, 1)/√3) times cos θ at the face (against its normal z) over π|d|², times the cell's area;
+    nothing where d points below the patch's plane."""
+    r = int(params["resolution"])
+    centres = -2 + 3 * (np.arange(r) + 0.5) / r
+    face = np.zeros((r, r))
+    normal = np.ones(3) / np.sqrt(3)
+    for j, y in enumerate(centres):
+        for i, x in enumerate(centres):
+            d = np.array([x, y, 1.0])
+            length = np.linalg.norm(d)
+            cos_patch, cos_face = d @ normal / length, 1.0 / length
+            face[j, i] = max(cos_patch, 0.0) * cos_face / (np.pi * length ** 2) * (3 / r) ** 2
+    return {"face": face}
+
+
 def contour_value(params: dict) -> np.ndarray:
     """H6: Lambert's formula for the test's point, normal and polygon."""
     return np.array(contour(params["point"], params["normal"], params["polygon"]))

@@ -48,6 +48,13 @@ def tables(p: dict, rng: np.random.Generator) -> Case:
     return Case({"resolution": res}, f"resolution {res}")
 
 
+def tetrahedron(p: dict, rng: np.random.Generator) -> Case:
+    """Another resolution of the same size class, odd ones included (a face has no halves)."""
+    r = p["resolution"]
+    res = int(rng.choice([c for c in ((5, 7, 9, 10, 12) if r <= 16 else (45, 50, 63, 80)) if c != r]))
+    return Case({"resolution": res}, f"resolution {res}")
+
+
 def views(p: dict, rng: np.random.Generator) -> Case:
     """The patch moved; the same normal; an up vector along an axis stays so, a turned one turns by another angle."""
     center = np.asarray(p["center"], float)

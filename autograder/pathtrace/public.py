@@ -69,6 +69,13 @@ def direct_test(name, points_, scene, points, normals, albedo, seed) -> Test:
                 expected="none", truth=truth(truths.direct_sample), timeout=QUICK, vary=variant(variants.points))
 
 
+def stratified_test(name, points_, scene, points, normals, albedo, strata, seed) -> Test:
+    params = {"scene": scene, "points": points, "normals": normals, "albedo": albedo, "strata": strata, "seed": seed}
+    return Test(name, "P5", points_, "stratified", params, check(checks.samples_match),
+                f"each point within {TOL.FLOAT64} of the mean of P2's formula over its cells", expected="none",
+                truth=truth(truths.stratified_direct), timeout=QUICK, depends_on=("P2",), vary=variant(variants.points))
+
+
 def shadow_count_test(name, points_, scene, points, normals, albedo, seed) -> Test:
     params = {"scene": scene, "points": points, "normals": normals, "albedo": albedo, "samples": 1, "seed": seed}
     return Test(name, "P2", points_, "direct_light", params, check(checks.shadow_rays_where_lit),
@@ -164,4 +171,8 @@ TESTS = [
                     [[0, 0.9, 0], [0.1, 0.95, -0.1], [0, 1.5, 0], [0.1, 1.2, 0.1], [0, 1.5, 0], [-2, 0.5, 0]],
                     _unit([[0, 1, 0], [0, 1, 0.2], [0, -1, 0], [0.1, -1, 0], [0, 1, 0], [-1, 0, 0]])),
     radiosity_test("P4 radiance: the Cornell box, surface by surface, against radiosity", 18, CORNELL, 8000, 7),
+    stratified_test("P5 stratified_direct_light (optional): 4 × 4 cells, points in and out of a blocker's shadow", 3,
+                    open_scene(), FLOOR_POINTS[:12], UP[:12], GREY[:12], 4, 9),
+    stratified_test("P5 stratified_direct_light (optional): 3 × 3 cells, the light seen whole", 2,
+                    open_scene(blocker=False), FLOOR_POINTS[12:20], UP[:8], GREY[:8], 3, 10),
 ]

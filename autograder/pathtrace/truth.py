@@ -84,24 +84,49 @@ def _samples(p: dict) -> tuple:
     return scene, paths.build(scene), rows, paths.uniforms(p.get("seed", 0), len(rows[0]), 2)
 
 
+def _direct_value(scene, ps, x: np.ndarray, n: np.ndarray, rho: np.ndarray, a: float, b: float
+                  ) -> tuple[np.ndarray, bool]:
+    """One light sample's value by P2's formula, long hand, and whether the point and the light face each other."""
+    y = ps.light_corner + a * ps.light_u + b * ps.light_v
+    d = y - x
+    r = math.sqrt(d @ d)
+    w = d / r
+    cos_x, cos_l = float(n @ w), float(-(w @ ps.light_normal))
+    if not (cos_x > 0 and cos_l > 0):
+        return np.zeros(3), False
+    if not _seen(scene, x, y):
+        return np.zeros(3), True
+    return ps.light_radiance * rho / math.pi * (cos_x * cos_l / (r * r) * ps.light_area), True
+
+
 def direct_sample(p: dict) -> dict[str, np.ndarray]:
     """P2's estimate for each sample as the formula gives it, in long hand, with visibility by the polygons' planes;
     and how many samples face the light (one shadow ray each)."""
     scene, ps, (points, normals, albedo), u = _samples(p)
     out, lit = [], 0
     for x, n, rho, (a, b) in zip(points, normals, albedo, u):
-        y = ps.light_corner + a * ps.light_u + b * ps.light_v
-        d = y - x
-        r = math.sqrt(d @ d)
-        w = d / r
-        cos_x, cos_l = float(n @ w), float(-(w @ ps.light_normal))
-        value = np.zeros(3)
-        if cos_x > 0 and cos_l > 0:
-            lit += 1
-            if _seen(scene, x, y):
-                value = ps.light_radiance * rho / math.pi * (cos_x * cos_l / (r * r) * ps.light_area)
+        value, faces = _direct_value(scene, ps, x, n, rho, a, b)
         out.append(value)
+        lit += faces
     return {"radiance": np.array(out), "lit": np.array(lit)}
+
+
+def stratified_direct(p: dict) -> dict[str, np.ndarray]:
+    """P5: per point, the mean of P2's formula over the cells of a k × k grid, cell (a, b) sampled at
+    ((a + jitter)/k, (b + jitter)/k) with the probe's jitter."""
+    from cs451.stages.pathtrace import paths
+    scene = parse_scene(p["scene"], "<truth>")
+    ps, k = paths.build(scene), int(p["strata"])
+    points, normals, albedo = (np.asarray(p[key], dtype=np.float64) for key in ("points", "normals", "albedo"))
+    jitter = paths.uniforms(p.get("seed", 0), len(points) * k * k, 2).reshape(len(points), k, k, 2)
+    out = []
+    for i, (x, n, rho) in enumerate(zip(points, normals, albedo)):
+        total = np.zeros(3)
+        for a in range(k):
+            for b in range(k):
+                total += _direct_value(scene, ps, x, n, rho, (a + jitter[i, a, b, 0]) / k, (b + jitter[i, a, b, 1]) / k)[0]
+        out.append(total / (k * k))
+    return {"radiance": np.array(out)}
 
 
 def lambert_irradiance(p: dict) -> dict[str, np.ndarray]:

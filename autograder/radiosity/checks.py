@@ -102,6 +102,12 @@ def loop_matches(out, expected, p) -> Verdict:
     return Verdict(1.0, f"{len(order)} shots in the right order with the right B and ΔB")
 
 
+def largest_first_matches(out, expected, p) -> Verdict:
+    """R7: the paper's order of shots, and B, ΔB after them, against its loop worked by hand."""
+    wrong = _same_loop(out, expected, p)
+    return wrong or Verdict(1.0, f"{len(np.asarray(expected['order']).ravel())} shots, each from the largest key")
+
+
 def solve_again_matches(out, expected, p) -> Verdict:
     """R6: R3's result, computing only the rows not known (each once, none known again), and keeping them."""
     wrong = _same_loop(out, expected, p)

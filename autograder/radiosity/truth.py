@@ -149,6 +149,27 @@ def progressive_by_hand(F, areas, reflectance, emission, tolerance: float, max_s
     return np.array(B), np.array(dB), order
 
 
+def largest_first_by_hand(F, areas, reflectance, emission, tolerance: float, max_shots: int,
+                          overshoot: float = 1.0) -> tuple[np.ndarray, np.ndarray, list[int]]:
+    """The 1988 paper's loop: before every shot, the stopping rule, then the patch of the largest key now (a linear
+    search, ties to the lower index)."""
+    B = [list(map(float, r)) for r in emission]
+    dB = [list(map(float, r)) for r in emission]
+    emitted = sum(sum(e) * a for e, a in zip(emission, areas))
+    order: list[int] = []
+    while len(order) < max_shots:
+        keys = [sum(abs(x) for x in dB[j]) * areas[j] for j in range(len(areas))]
+        i = max(range(len(keys)), key=lambda j: (keys[j], -j))
+        if sum(keys) <= tolerance * emitted or keys[i] <= 0:
+            break
+        left = [(1 - overshoot) * x for x in dB[i]]
+        dB[i] = [overshoot * x for x in dB[i]]
+        B, dB = shoot_by_hand(i, F, areas, reflectance, B, dB)
+        dB[i] = left
+        order.append(i)
+    return np.array(B), np.array(dB), order
+
+
 def ambient_by_hand(areas, reflectance, unshot) -> np.ndarray:
     total = sum(areas)
     out = []
@@ -207,6 +228,12 @@ def shot(p: dict) -> dict[str, np.ndarray]:
 def shooting_loop(p: dict) -> dict[str, np.ndarray]:
     B, dB, order = progressive_by_hand(p["F"], p["areas"], p["reflectance"], p["emission"], p["tolerance"],
                                        p["max_shots"], p.get("overshoot", 1.0))
+    return {"radiosity": B, "unshot": dB, "order": np.array(order, dtype=np.int64)}
+
+
+def largest_first(p: dict) -> dict[str, np.ndarray]:
+    B, dB, order = largest_first_by_hand(p["F"], p["areas"], p["reflectance"], p["emission"], p["tolerance"],
+                                         p["max_shots"], p.get("overshoot", 1.0))
     return {"radiosity": B, "unshot": dB, "order": np.array(order, dtype=np.int64)}
 
 

@@ -189,3 +189,17 @@ def vertex_colors(p: dict, rng: np.random.Generator, kind: str) -> Case:
                 f"the polygons stretched by {factors} along x, y, z, cut at {edge:g} into {len(patches)} patches, "
                 f"random radiosities")
 
+
+
+def largest_first(p: dict, rng: np.random.Generator) -> Case:
+    """A fresh system of as many patches, the same shots, tolerance and overshooting kind, searched until the paper's
+    order parts from the notes' sweeps within its shots (the case tells the two apart)."""
+    from autograder.radiosity.public import random_system
+    n, shots = len(p["areas"]), p["max_shots"]
+    overshoot = 1.0 if p["overshoot"] == 1.0 else num(rng.uniform(1.3, 1.7), 3)
+    for _ in range(200):
+        system = _hand_sized(rng) if n == 3 else random_system(n, int(rng.integers(1 << 30)), closed=_closed(p))
+        params = {**system, "tolerance": p["tolerance"], "max_shots": shots, "overshoot": overshoot}
+        if truths.largest_first(params)["order"].tolist() != truths.shooting_loop(params)["order"].tolist():
+            return Case(params, f"a fresh system of {n} patches, overshoot {overshoot:g}, {shots} shots at most")
+    raise RuntimeError("no fresh system parts the two orders")

@@ -8,6 +8,8 @@ from .geometry import camera_rays, closest_hit, unoccluded
 from .light import direct_light
 from .roulette import roulette
 from .sampling import cosine_sample
+from .strata import stratified_direct_light
 from .tracer import radiance
 
-__all__ = ["camera_rays", "closest_hit", "unoccluded", "cosine_sample", "direct_light", "roulette", "radiance"]
+__all__ = ["camera_rays", "closest_hit", "unoccluded", "cosine_sample", "direct_light", "roulette", "radiance",
+           "stratified_direct_light"]

@@ -29,6 +29,8 @@ TASKS = (
     Task("H5", "form_factor_row", "The row of form factors",
          ("top_items", "side_items", "top_weights", "side_weights", "n_patches"), (Out("row", ("n_patches",)),)),
     Task("H6", "point_polygon_form_factor", "The proximity fix", ("point", "normal", "polygon"), (Out("F", ()),)),
+    Task("H7", "tetrahedron_delta_form_factors", "The cubic tetrahedron", ("resolution",),
+         (Out("face", ("resolution", "resolution")),), optional=True),
 )
 
 
@@ -143,6 +145,11 @@ def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, **_: An
 # --- probes: what the autograder's worker asks a submission for ------------------
 
 PROBES = Probes()
+
+
+@PROBES.register
+def probe_tetrahedron(impl: Any, resolution: int) -> dict[str, np.ndarray]:
+    return {"face": STAGE.call(impl, "H7", int(resolution))}
 
 
 @PROBES.register

@@ -14,4 +14,5 @@ NOTHING = {
     'H4': 'return ITEM_VS, ITEM_FS',
     'H5': 'return np.zeros(n_patches)',
     'H6': 'return 0.0',
+    'H7': 'return np.zeros((resolution, resolution))',
 }

@@ -32,6 +32,8 @@ TASKS = (
          (Out("alive", ("len(weights)",), "b"), Out("weights", ("len(weights)", 3)))),
     Task("P4", "radiance", "The path tracer", ("scene", "origins", "directions", "rng"),
          (Out("radiance", ("len(origins)", 3)),)),
+    Task("P5", "stratified_direct_light", "Stratified light samples", ("scene", "points", "normals", "albedo", "jitter"),
+         (Out("radiance", ("len(points)", 3)),), optional=True),
 )
 
 
@@ -129,6 +131,18 @@ def probe_direct_light(impl: Any, scene: dict, points: list, normals: list, albe
     n = paths.repeated(_array(normals, (None, 3), "normals"), samples)
     rho = paths.repeated(_array(albedo, (None, 3), "albedo"), samples)
     out = STAGE.call(impl, "P2", ps, x, n, rho, paths.uniforms(seed, len(x), 2))
+    return {"radiance": out, "shadow": np.array(ps.counters["shadow"])}
+
+
+@PROBES.register
+def probe_stratified(impl: Any, scene: dict, points: list, normals: list, albedo: list, strata: int, seed: int = 0
+                     ) -> dict[str, np.ndarray]:
+    """P5 at each point over ``strata`` × ``strata`` cells, jittered from ``seed``; the shadow rays it cast."""
+    ps = _scene(scene)
+    x = _array(points, (None, 3), "points")
+    jitter = paths.uniforms(seed, len(x) * strata * strata, 2).reshape(len(x), strata, strata, 2)
+    out = STAGE.call(impl, "P5", ps, x, _array(normals, (len(x), 3), "normals"), _array(albedo, (len(x), 3), "albedo"),
+                     jitter)
     return {"radiance": out, "shadow": np.array(ps.counters["shadow"])}
 
 

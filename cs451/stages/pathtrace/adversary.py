@@ -8,4 +8,5 @@ NOTHING = {
     'P2': 'return np.zeros((len(points), 3))',
     'P3': 'w = np.asarray(weights, float)\n    return np.zeros(len(w), bool), np.zeros_like(w)',
     'P4': 'return np.zeros((len(origins), 3))',
+    'P5': 'return np.zeros((len(points), 3))',
 }

@@ -47,6 +47,10 @@ TASKS = (
          ("known", "row", "areas", "reflectance", "emission", "tolerance", "max_shots", "overshoot", "on_shot"),
          (Out("radiosity", ("len(areas)", 3)), Out("unshot", ("len(areas)", 3)),
           Out("order", (None,), kind="i", below="len(areas)"))),
+    Task("R7", "shoot_largest_first", "The paper's order",
+         ("row", "areas", "reflectance", "emission", "tolerance", "max_shots", "overshoot", "on_shot"),
+         (Out("radiosity", ("len(areas)", 3)), Out("unshot", ("len(areas)", 3)),
+          Out("order", (None,), kind="i", below="len(areas)")), optional=True),
 )
 
 SOLVERS = ("progressive", "jacobi", "gauss-seidel", "direct")
@@ -315,6 +319,15 @@ def probe_solve_again(impl: Any, known_rows: list, tolerance: float, max_shots: 
     return {"radiosity": radiosity, "unshot": unshot, "order": np.asarray(order, dtype=np.int64),
             "rows_asked": np.asarray(asked, dtype=np.int64), "known_after": np.asarray(keys, dtype=np.int64),
             "known_rows_right": np.asarray(right)}
+
+
+@PROBES.register
+def probe_largest_first(impl: Any, tolerance: float, max_shots: int, overshoot: float = 1.0, **system: Any
+                        ) -> dict[str, np.ndarray]:
+    """R7 on a small system given in the parameters."""
+    F_, a, rho, E = _system(system, {})
+    B, dB, order = _shooting_call(impl, "R7", (MatrixRows(F_).row, a, rho, E, tolerance, max_shots, overshoot, None))
+    return {"radiosity": B, "unshot": dB, "order": np.asarray(order, dtype=np.int64)}
 
 
 @PROBES.register

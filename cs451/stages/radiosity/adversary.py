@@ -10,6 +10,7 @@ NOTHING = {
     'R3': 'return np.array(emission, float), np.zeros_like(np.array(emission, float)), []',
     'R4': 'return np.zeros(3)',
     'R6': 'return np.array(emission, float), np.zeros_like(np.array(emission, float)), []',
+    'R7': 'return np.array(emission, float), np.zeros_like(np.array(emission, float)), []',
     'R5': ('q = np.asarray(quads, float)\n    return q.reshape(-1, 3), '
            'np.repeat(np.asarray(radiosity, float), 4, axis=0),'
            ' np.arange(4 * len(q)).reshape(-1, 4)'),
