@@ -226,13 +226,15 @@ def test07_rubric_points_are_the_autograder_points(path):
     for row in rows:
         label = row[0]
         if label.lower() == "total":
-            selected = tests
+            selected = [t for t in tests if not t.extension]    # an optional extension's points are not in the grade
         else:
             assert label in {t.id for t in stage.tasks}, f"{path}: rubric row {label!r} is not a task of stage {stage.name!r}"
             task = stage.task(label)
             assert row[1] == task.function, f"{path}: rubric row {label} names {row[1]!r}, the function is {task.function!r}"
             selected = [t for t in tests if t.task == label]
             seen.append(label)
+            assert not task.optional or "optional" in " ".join(row).lower(), \
+                f"{path}: rubric row {label} must say that the task is an optional extension, outside the total"
         want = expected(selected)
         assert float(row[2]) == want["points"], \
             f"{path}: rubric gives {label} {row[2]} points, its tests are worth {want['points']:g}"

@@ -50,8 +50,17 @@ def test02_every_mutant_is_a_program_that_differs_from_the_source():
 
 
 def test03_the_reference_has_mutants_in_every_task_with_code():
+    from cs451.stages import get_stage
     tasks = {m.task for m in stage_mutants("radiosity")}
-    assert tasks == {"R1", "R2", "R3", "R4", "R5", "R6"}
+    assert tasks == {t.id for t in get_stage("radiosity").tasks}    # R7, the optional extension, included
+
+
+def test03b_a_mistake_in_an_optional_extension_loses_its_points_though_the_grade_holds_none(tmp_path):
+    """R7 (optional) with its overshoot dropped: its points travel in results.json's extra_data, not its score."""
+    mutant = next(m for m in stage_mutants("radiosity")
+                  if m.task == "R7" and m.kind == "statement dropped" and m.before.startswith("unshot[i] = overshoot"))
+    got, full = task_score("radiosity", apply(mutant, tmp_path), "R7")
+    assert full == 5 and got < full
 
 
 def test04_a_planted_mistake_loses_its_tasks_points(tmp_path):

@@ -28,7 +28,7 @@ from hidden_host import hiding_host
 STAGE = "sphere"
 TESTS = load_tests(STAGE)
 HIDDEN = [t for t in TESTS if t.hidden]
-PUBLIC_POINTS = sum(t.points for t in TESTS if not t.hidden)
+PUBLIC_POINTS = sum(t.points for t in TESTS if not t.hidden and not t.extension)   # the grade's: no extension
 HIDDEN_NOTE = f"{len(HIDDEN)} hidden tests ({sum(t.points for t in HIDDEN):g} points)"   # as the report counts them
 
 

@@ -184,14 +184,15 @@ def release_warnings(stage: str, include_reference: tuple[str, ...] = ()) -> lis
 
 
 def workflow_text(stage: str) -> str:
-    """The GitHub Actions workflow: grade once, then one Classroom test per task worth its public points."""
+    """The GitHub Actions workflow: grade once, then one Classroom test per task worth its public points (none for
+    the optional extension, whose points are not in the grade; the report shows how it did)."""
     st = get_stage(stage)
     public = [t for t in load_tests(stage, include_hidden=False)]
     points = {task.id: sum(t.points for t in public if t.task == task.id) for task in st.tasks}
     text = WORKFLOW_HEADER.format(stage=stage)
     steps = []
     for task in st.tasks:
-        if points[task.id] <= 0:
+        if points[task.id] <= 0 or task.optional:
             continue
         step = task.id.lower()
         steps.append(step)
