@@ -70,7 +70,8 @@ def test01_item_buffer_matches_ray_casting_through_cell_centres(ref, patch):
 def test02_stage_is_registered_with_its_tasks():
     assert "hemicube" in stage_names()
     stage = get_stage("hemicube")
-    assert [t.id for t in stage.tasks] == ["H1", "H2", "H3", "H4", "H5", "H6"]
+    assert [t.id for t in stage.tasks] == ["H1", "H2", "H3", "H4", "H5", "H6", "H7"]
+    assert [t.id for t in stage.tasks if t.optional] == ["H7"]
 
 
 def test03_render_the_item_buffer_and_the_form_factors(ref):
