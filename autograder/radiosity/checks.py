@@ -105,7 +105,13 @@ def loop_matches(out, expected, p) -> Verdict:
 def largest_first_matches(out, expected, p) -> Verdict:
     """R7: the paper's order of shots, and B, ΔB after them, against its loop worked by hand."""
     wrong = _same_loop(out, expected, p)
-    return wrong or Verdict(1.0, f"{len(np.asarray(expected['order']).ravel())} shots, each from the largest key")
+    if wrong:
+        return wrong
+    order = [int(i) for i in np.asarray(expected["order"]).ravel()]
+    unreported = _on_shot_reported(out, order, output(out, "radiosity", (len(p["areas"]), 3), "radiosity"))
+    if unreported:
+        return Verdict(0.5, f"B and ΔB are right, but {unreported}")
+    return Verdict(1.0, f"{len(order)} shots, each from the largest key")
 
 
 def solve_again_matches(out, expected, p) -> Verdict:

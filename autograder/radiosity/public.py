@@ -119,11 +119,17 @@ def by_hand_test(name, points, system, max_shots, tolerance=0.0, overshoot=1.0) 
                 timeout=SOLVE, depends_on=("R2",), vary=variant(variants.progressive))
 
 
-def largest_first_test(name, points, system, max_shots, tolerance=0.0, overshoot=1.0) -> Test:
+def largest_first_test(name, points, system, max_shots, tolerance=0.0, overshoot=1.0, vary=None) -> Test:
     params = {**system, "tolerance": tolerance, "max_shots": max_shots, "overshoot": overshoot}
     return Test(name, "R7", points, "largest_first", params, check(checks.largest_first_matches),
                 f"same shots in the same order; B, ΔB within {TOL.LOOP_RTOL}", expected="none",
-                truth=truth(truths.largest_first), timeout=SOLVE, depends_on=("R2",), vary=variant(variants.largest_first))
+                truth=truth(truths.largest_first), timeout=SOLVE, depends_on=("R2",),
+                vary=vary or variant(variants.largest_first))
+
+
+def absorbing(system: dict) -> dict:
+    """The system with nothing reflecting (ρ = 0): once each emitter has shot, every key is exactly 0."""
+    return {**system, "reflectance": [[0.0, 0.0, 0.0]] * len(system["areas"])}
 
 
 def solve_again_case(system: dict, known: str, overshoot: float = 1.0, tolerance: float = 1e-4) -> dict:
@@ -292,8 +298,10 @@ TESTS = [
                  random_system(7, seed=22), "painted"),
     solve_again_test("R6 solve_again: nothing known, overshooting 1.5: each shooter's row computed once", 2,
                  random_system(5, seed=23), "none", overshoot=1.5),
-    largest_first_test("R7 shoot_largest_first (optional): six patches, 14 shots, each from the largest key now", 3,
+    largest_first_test("R7 shoot_largest_first (optional): six patches, 14 shots, each from the largest key now", 2,
                        SIX, 14),
+    largest_first_test("R7 shoot_largest_first (optional): nothing reflects (ρ = 0), tolerance 0: it stops once "
+                       "every key is 0", 1, absorbing(SIX), 100, vary=variant(variants.absorbing)),
     largest_first_test("R7 shoot_largest_first (optional): the hand-worked scene overshooting (ω = 1.5) to 1e-6", 2,
                        HAND, 10_000, tolerance=1e-6, overshoot=1.5),
 ]

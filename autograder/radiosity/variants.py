@@ -203,3 +203,10 @@ def largest_first(p: dict, rng: np.random.Generator) -> Case:
         if truths.largest_first(params)["order"].tolist() != truths.shooting_loop(params)["order"].tolist():
             return Case(params, f"a fresh system of {n} patches, overshoot {overshoot:g}, {shots} shots at most")
     raise RuntimeError("no fresh system parts the two orders")
+
+
+def absorbing(p: dict, rng: np.random.Generator) -> Case:
+    """A fresh system of as many patches with nothing reflecting, as many shots at most, tolerance 0."""
+    from autograder.radiosity.public import absorbing as no_reflection, random_system
+    system = no_reflection(random_system(len(p["areas"]), int(rng.integers(1 << 30))))
+    return Case({**p, **system}, f"a fresh system of {len(p['areas'])} patches that reflects nothing")

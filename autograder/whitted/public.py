@@ -43,7 +43,8 @@ LIGHT_BEHIND = {
     "camera": {"eye": [0, 3, 4], "center": [0, 0, 0], "fovy": 40},
     "image": {"background": [0.2, 0.3, 0.5]},
     "ambient": [0.3, 0.3, 0.3],
-    "lights": [{"type": "point", "position": [0.5, -4, 0.2]}],
+    "lights": [{"type": "point", "position": [0.5, -4, 0.2]},         # under the floor: behind every surface it lights
+               {"type": "point", "position": [0, 4, 1], "diffuse": [0, 0, 0], "specular": [0, 0, 0]}],  # sends nothing
     "materials": {"floor": {"diffuse": [0.7, 0.7, 0.7], "ambient": [0.5, 0.5, 0.5]},
                   "tile": {"diffuse": [0.2, 0.5, 0.9], "ambient": [0.2, 0.5, 0.9], "specular": [0.5, 0.5, 0.5], "shininess": 20}},
     "objects": [{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "material": "floor", "checker": 0.5,
@@ -202,11 +203,11 @@ def hits_test(name, points, scene, rays=None, size=None, hierarchy=None) -> Test
                 vary=variant(variants.closest_hit_rays if rays is not None else variants.closest_hit_image))
 
 
-def shading_test(name, points, **params) -> Test:
+def shading_test(name, points, vary=None, **params) -> Test:
     return Test(name, "W6", points, "local_shading", params,
                 array_close("colour", rtol=TOL.FLOAT64, atol=TOL.FLOAT64_ATOL, what="the colour"),
                 f"within {TOL.FLOAT64} relative of the formula", expected="none", truth=truth(truths.shading), timeout=QUICK,
-                vary=variant(variants.local_shading))
+                vary=vary or variant(variants.local_shading))
 
 
 def shadow_test(name, points, scene, origins, targets) -> Test:
@@ -352,6 +353,12 @@ CHECKER_SEGMENTS = {"origins": np.c_[_x[:, 0], np.full(16, -1.0), _x[:, 1]].toli
 _d = np.asarray(_unit(MORE.normal(size=(20, 3))))
 REFLECT = {"directions": _d.tolist(), "normals": _unit(-_d + MORE.normal(size=(20, 3)) * 0.4)}
 
+#: each light square to its normal in exact arithmetic (n·l = 0, not 1e-17), the eye in front: W6 lights none of them
+GRAZING = {"normals": [[0, 0, 1], [0, 0, 1], [0, 1, 0], [1, 0, 0]],
+           "to_light": [[1, 0, 0], [0.6, 0.8, 0], [0.8, 0, -0.6], [0, 0.28, 0.96]],
+           "to_eye": [[0, 0, 1], [0.6, 0, 0.8], [0, 0.8, 0.6], [0.6, 0.8, 0]],
+           "light_diffuse": [[1, 0.5, 0.2]] * 4, "light_specular": [[0.9, 0.9, 0.9]] * 4,
+           "diffuse": [[0.5, 0.5, 0.5]] * 4, "specular": [[0.8, 0.8, 0.8]] * 4, "shininess": [1.0, 8.0, 0.0, 2.0]}
 _lens_rng = np.random.default_rng(451)   # its own stream: the data above stays as it was
 LENS_RAYS = _unit(_lens_rng.uniform(-0.3, 0.3, (20, 3)) + [0, 0, -1])
 LENS_OBLIQUE = _unit(_lens_rng.uniform(-0.3, 0.3, (20, 3)) + np.subtract([0, 0, 0], [3, 2, 6]) / 7)
@@ -380,7 +387,9 @@ TESTS = [
     depth_test("W5 closest_hit: primary visibility of the Cornell box against pyrender, 64×64", 6, CORNELL, (64, 64)),
     hits_test("W5 closest_hit: 90 rays in Whitted's scene, 30 from inside the glass", 2, WHITTED, rays=WHITTED_SOME_RAYS),
     hits_test("W5 closest_hit: Whitted's scene through the reference's hierarchy, 40×30", 1, WHITTED, size=(40, 30)),
-    shading_test("W6 local_shading: 40 random points, lights and materials", 4, **SHADE),
+    shading_test("W6 local_shading: 40 random points, lights and materials", 3, **SHADE),
+    shading_test("W6 local_shading: lights exactly at grazing (n·l = 0): no diffuse, no highlight", 1, **GRAZING,
+                 vary=variant(variants.grazing)),
     shadow_test("W7 shadow_transmission: glass, a film, a stone, nothing", 5, SHADOW_SCENE, **SHADOW_SEGMENTS),
     shadow_test("W7 shadow_transmission: a checkerboard of two glasses", 2, CHECKER_SHADOW_SCENE, **CHECKER_SEGMENTS),
     reflect_test("W8 reflect: 20 random directions and normals", 2, **REFLECT),
@@ -390,15 +399,17 @@ TESTS = [
     refract_test("W9 refract: out of glass (η = 1.5), with total internal reflection", 2, **REFRACT_OUT),
     fresnel_test("W10 fresnel: air to glass over all angles", 3, cos_i=np.linspace(0, 1, 21).tolist(), eta=1 / 1.5),
     fresnel_test("W10 fresnel: glass to air, past the critical angle", 1, cos_i=np.linspace(0, 1, 11).tolist(), eta=1.5),
-    image_test("W11 trace: Whitted's scene, 96×72", 6, WHITTED, (96, 72)),
+    image_test("W11 trace: Whitted's scene, 96×72", 5, WHITTED, (96, 72)),
     counter_test("W11 trace: no mirror or glass casts no secondary ray (Cornell box, 32×32)", 2, CORNELL, (32, 32),
                  {"camera": 1, "reflection": 0, "transmission": 0, "shadow": "some"}),
-    counter_test("W11 trace: a light behind every surface costs no shadow ray", 2, LIGHT_BEHIND, (32, 24),
+    counter_test("W11 trace: a light behind every surface, and one that sends nothing, cost no shadow ray", 2, LIGHT_BEHIND, (32, 24),
                  {"camera": 1, "shadow": 0}),
     counter_test("W11 trace: the β cut-off between two mirrors (r = 0.5, cut-off 0.1)", 2, two_mirrors(0.5, 0.1, 10),
                  (16, 12), {"camera": 1, "reflection": mirror_rays(0.5, 0.1, 10), "transmission": 0}),
     counter_test("W11 trace: the depth limit between two mirrors (r = 0.9, cut-off 0.01, depth 3)", 1,
                  two_mirrors(0.9, 0.01, 3), (12, 8), {"camera": 1, "reflection": mirror_rays(0.9, 0.01, 3)}),
+    image_test("W11 trace: Whitted's scene at depth 1 (the mirror still shows the floor), 64×48", 1,
+               bundled("whitted", options={"whitted": {"max_depth": 1, "min_weight": 0.01, "spp": 1}}), (64, 48)),
     lens_test("W12 thin_lens (optional): a camera on the z axis, lens radius 0.1, focused at 5", 3,
               camera={"eye": [0, 0, 5], "center": [0, 0, 0], "up": [0, 1, 0], "fovy": 40}, directions=LENS_RAYS,
               aperture=0.1, focus=5.0, u=LENS_U),

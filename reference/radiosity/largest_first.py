@@ -18,8 +18,8 @@ def shoot_largest_first(row: Callable[[int], np.ndarray], areas: np.ndarray, ref
                         emission: np.ndarray, tolerance: float, max_shots: int, overshoot: float,
                         on_shot: Callable | None) -> tuple:
     """R3's contract (the same arguments, keys, overshooting, stopping rule, ``on_shot`` and result), but the shooter
-    is the patch of the largest key now, before every shot (ties go to the lower index); stop too when every key
-    is 0. Returns ``(radiosity, unshot, order)``."""
+    is the patch of the largest key now, before every shot (ties go to the lower index). Returns
+    ``(radiosity, unshot, order)``."""
     # BEGIN SOLUTION R7: R3's loop without sweeps: the largest key before every shot (handout §R7)
     areas = np.asarray(areas, dtype=np.float64)
     radiosity = np.array(emission, dtype=np.float64)
@@ -27,10 +27,8 @@ def shoot_largest_first(row: Callable[[int], np.ndarray], areas: np.ndarray, ref
     total_emitted = float((np.asarray(emission).sum(axis=1) * areas).sum())
     order: list[int] = []
     key = np.abs(unshot).sum(axis=1) * areas
-    while len(order) < max_shots and key.sum() > tolerance * total_emitted:
+    while len(order) < max_shots and key.sum() > tolerance * total_emitted:   # so some key is above 0
         i = int(np.argmax(key))                  # the first of equal keys
-        if key[i] <= 0.0:
-            break
         left = (1.0 - overshoot) * unshot[i]
         unshot[i] = overshoot * unshot[i]
         radiosity, unshot = shoot(i, row(i), areas, reflectance, radiosity, unshot)

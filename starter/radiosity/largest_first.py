@@ -18,7 +18,7 @@ def shoot_largest_first(row: Callable[[int], np.ndarray], areas: np.ndarray, ref
                         emission: np.ndarray, tolerance: float, max_shots: int, overshoot: float,
                         on_shot: Callable | None) -> tuple:
     """R3's contract (the same arguments, keys, overshooting, stopping rule, ``on_shot`` and result), but the shooter
-    is the patch of the largest key now, before every shot (ties go to the lower index); stop too when every key
-    is 0. Returns ``(radiosity, unshot, order)``."""
+    is the patch of the largest key now, before every shot (ties go to the lower index). Returns
+    ``(radiosity, unshot, order)``."""
     # TODO R7: R3's loop without sweeps: the largest key before every shot (handout §R7)
     raise NotImplementedError("R7: R3's loop without sweeps: the largest key before every shot (handout §R7)")

@@ -29,6 +29,7 @@ from ...solvers import MatrixRows, Solution, solve_direct, shooting_matrix
 from ...scene import AreaLight, Polygon, Scene, parse_scene
 from ..base import Out, Probes, Stage, Task, check_returns, part, student_call
 from .options import RadiosityOptions
+from .shots_seen import ShotsSeen
 
 TASKS = (
     Task("R1", "subdivide", "Subdividing into patches", ("quads", "max_edge"),
@@ -276,17 +277,10 @@ def probe_progressive(impl: Any, tolerance: float, max_shots: int, overshoot: fl
                       ) -> dict[str, np.ndarray]:
     """The shooting loop on a given system (small hand-worked scenes in the parameters, or a scene's trusted arrays)."""
     F_, a, rho, E = _system({"F": F, "areas": areas, "reflectance": reflectance, "emission": emission}, given)
-    rows = MatrixRows(F_)
-    calls_seen: list[tuple[int, int]] = []
-    last_seen: list[np.ndarray] = [np.full_like(E, np.nan)]
-
-    def on_shot(shots: int, i: int, radiosity: np.ndarray, unshot: np.ndarray) -> None:
-        calls_seen.append((int(shots), int(i)))
-        last_seen[0] = np.array(radiosity, dtype=np.float64)
-
-    sol = solve_progressive(impl, rows, a, rho, E, tolerance, max_shots, overshoot, use_ambient=False, on_shot=on_shot)
+    rows, seen = MatrixRows(F_), ShotsSeen(E)
+    sol = solve_progressive(impl, rows, a, rho, E, tolerance, max_shots, overshoot, use_ambient=False, on_shot=seen)
     return {"radiosity": sol.radiosity, "unshot": sol.unshot, "order": np.asarray(sol.order, dtype=np.int64),
-            "on_shot_calls": np.asarray(calls_seen, dtype=np.int64).reshape(-1, 2), "on_shot_last": last_seen[0],
+            **seen.outputs(),
             "rows_computed": np.asarray(rows.counters["rows_computed"]),
             "rows_requested": np.asarray(rows.counters["rows_computed"] + rows.counters["rows_cached_hits"]),
             "direct": solve_direct(shooting_matrix(F_, a), rho, E),
@@ -326,8 +320,9 @@ def probe_largest_first(impl: Any, tolerance: float, max_shots: int, overshoot: 
                         ) -> dict[str, np.ndarray]:
     """R7 on a small system given in the parameters."""
     F_, a, rho, E = _system(system, {})
-    B, dB, order = _shooting_call(impl, "R7", (MatrixRows(F_).row, a, rho, E, tolerance, max_shots, overshoot, None))
-    return {"radiosity": B, "unshot": dB, "order": np.asarray(order, dtype=np.int64)}
+    seen = ShotsSeen(E)
+    B, dB, order = _shooting_call(impl, "R7", (MatrixRows(F_).row, a, rho, E, tolerance, max_shots, overshoot, seen))
+    return {"radiosity": B, "unshot": dB, "order": np.asarray(order, dtype=np.int64), **seen.outputs()}
 
 
 @PROBES.register
