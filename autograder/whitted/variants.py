@@ -224,19 +224,22 @@ def local_shading(p: dict, rng: np.random.Generator) -> Case:
 
 def grazing(p: dict, rng: np.random.Generator) -> Case:
     """Fresh lights exactly square to their normals: each normal an axis, the light a fresh unit vector with no
-    component along it (so n·l is exactly 0), the eye a fresh direction in front; fresh colours."""
+    component along it (so n·l is exactly 0), the eye a fresh direction in front; the last two lights in front
+    (lit as usual); fresh colours."""
     n = len(p["normals"])
     axes = rng.integers(0, 3, n)
     normals, lights, eyes = np.zeros((n, 3)), rng.normal(size=(n, 3)), rng.normal(size=(n, 3))
     normals[np.arange(n), axes] = 1.0
     lights[np.arange(n), axes] = 0.0
+    last = np.arange(n - 2, n)
+    lights[last, axes[last]] = np.abs(rng.normal(size=2)) + 0.5
     eyes[np.arange(n), axes] = np.abs(eyes[np.arange(n), axes]) + 0.5
     out = {"normals": normals.tolist(), "to_light": np.round(_unit(lights), 12).tolist(),
            "to_eye": np.round(_unit(eyes), 12).tolist()}
     for k in ("light_diffuse", "light_specular", "diffuse", "specular"):
         out[k] = np.round(rng.uniform(0.2, 1, (n, 3)), 6).tolist()
     out["shininess"] = rng.choice([0.0, 1.0, 8.0], n).tolist()
-    return Case(out, f"{n} fresh lights exactly at grazing")
+    return Case(out, f"{n - 2} fresh lights exactly at grazing and 2 lit ones")
 
 
 def shadow_transmission(p: dict, rng: np.random.Generator) -> Case:
