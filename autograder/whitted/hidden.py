@@ -7,6 +7,8 @@ from autograder.whitted.public import (CORNELL, WHITTED, bundled, camera_test, c
                                        hits_test, image_test, mirror_rays, reflect_test, refract_test, shading_test,
                                        shadow_test, sphere_test, triangle_test, two_mirrors, watertight_test, bvh_test,
                                        SHADOW_SCENE)
+from autograder.whitted import variants
+from cs451.grading.spec import variant
 
 RNG = np.random.default_rng(4242)
 
@@ -53,7 +55,10 @@ _g = np.asarray(_unit(RNG.normal(size=(30, 3)) + [0, 0, -1]))
 TESTS = [
     camera_test("W1 camera_rays: an oblique camera, 9×5, fovy 75°", 2,
                 camera={"eye": [3, -2, 7], "center": [-1, 0.5, 0], "up": [0.2, 1, 0], "fovy": 75}, width=9, height=5),
-    sphere_test("W2 intersect_sphere: a 1e-3 sphere 1e4 away (no cancellation)", 2,
+    sphere_test("W2 intersect_sphere: tangent rays of a sphere off the origin, one at its own origin", 1,
+                center=[1, 2, 3], radius=2.0, origins=[[1, 4, -2], [3, 2, 3], [1, 2, -5]],
+                directions=[[0, 0, 1], [0, 1, 0], [0, 0, 2]], vary=variant(variants.sphere_exact)),
+    sphere_test("W2 intersect_sphere: a 1e-3 sphere 1e4 away (no cancellation)", 1,
                 center=FAR_CENTER.tolist(), radius=1e-3, **FAR_RAYS),
     triangle_test("W3 intersect_triangle: 30 random rays, degenerate triangles", 1,
                   **{k: TRI_RANDOM[k] + TRI_DEGENERATE[k] for k in TRI_RANDOM}),

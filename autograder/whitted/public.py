@@ -95,11 +95,11 @@ def lens_test(name, points, **params) -> Test:
                 expected="none", truth=truth(truths.thin_lens), timeout=QUICK, vary=variant(variants.thin_lens))
 
 
-def sphere_test(name, points, **params) -> Test:
+def sphere_test(name, points, vary=None, **params) -> Test:
     return Test(name, "W2", points, "intersect_sphere", params,
                 all_of([("both roots, smaller first, inf on a miss", sub(checks.sphere_roots))]),
                 f"roots within {TOL.FLOAT64} × max(|t1|, radius) of exact arithmetic; misses are inf", expected="none",
-                truth=truth(truths.sphere_roots), timeout=QUICK, vary=variant(variants.intersect_sphere))
+                truth=truth(truths.sphere_roots), timeout=QUICK, vary=vary or variant(variants.intersect_sphere))
 
 
 def triangle_test(name, points, edge_case=False, **params) -> Test:
@@ -370,8 +370,11 @@ TESTS = [
     camera_test("W1 camera_rays: the Whitted scene's camera, 8×6", 4, camera=WHITTED["camera"], width=8, height=6),
     camera_test("W1 camera_rays: a rolled camera (up not perpendicular to the view), 5×7, fovy 60°", 2,
                 camera=ROLLED_CAMERA, width=5, height=7),
-    sphere_test("W2 intersect_sphere: hits, a miss, a ray from inside, a sphere behind", 6, center=[0, 0, 0], radius=1.0,
+    sphere_test("W2 intersect_sphere: hits, a miss, a ray from inside, a sphere behind", 5, center=[0, 0, 0], radius=1.0,
                 **SPHERE_RAYS),
+    sphere_test("W2 intersect_sphere: exactly tangent (a double root), and tangent at its own origin (a miss)", 1,
+                center=[0, 0, 0], radius=1.0, origins=[[0, 1, -5], [1, 0, 0], [0, 0, -5], [0, -1, 3]],
+                directions=[[0, 0, 1], [0, 1, 0], [0, 0, 1], [0, 0, -2]], vary=variant(variants.sphere_exact)),
     sphere_test("W2 intersect_sphere: a 5e-4 sphere 1e4 away (no cancellation)", 2, center=FAR_SPHERE.tolist(),
                 radius=5e-4, **FAR_SPHERE_RAYS),
     triangle_test("W3 intersect_triangle: hits, misses, behind, parallel", 3, **TRI_RAYS,

@@ -76,7 +76,7 @@ def sphere_exact(o, d, c, r) -> tuple[float, float]:
     b = sum(x * y for x, y in zip(f, d))
     cc = sum(x * x for x in f) - r * r
     disc = b * b - a * cc
-    if disc < 0:
+    if disc < 0 or (disc == 0 and b == 0):   # the handout's rule: tangent at its own origin (both roots 0) is a miss
         return np.inf, np.inf
     # t = (-b ± √disc) / a; the square root of an exact rational, to 1e-30 relative, by Newton in Fractions
     s = Fraction(np.sqrt(float(disc)))

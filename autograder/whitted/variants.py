@@ -65,6 +65,19 @@ def intersect_sphere(p: dict, rng: np.random.Generator) -> Case:
                 f"shipped case turned, scaled by {move.s:.3g} and moved")
 
 
+def sphere_exact(p: dict, rng: np.random.Generator) -> Case:
+    """The sphere and its rays with axes swapped and flipped and lengths scaled by a power of two (exact in floating
+    point, so a tangent ray stays exactly tangent), then moved by a whole number along each axis; directions scaled
+    by powers of two too."""
+    move = ExactMove(rng)
+    shift = rng.integers(-4, 5, 3).astype(float)
+    origins = (np.asarray(move.point(p["origins"])) + shift).tolist()
+    directions = (np.asarray(move.vector(p["directions"])) * 2.0 ** rng.integers(-1, 2, (len(p["directions"]), 1))).tolist()
+    center = (np.asarray(move.point(p["center"])) + shift).tolist()
+    return Case({"center": center, "radius": p["radius"] * move.scale, "origins": origins, "directions": directions},
+                f"a sphere of radius {p['radius'] * move.scale:g} at {center}, {len(origins)} rays tangent or through it")
+
+
 class ExactMove:
     """Axes swapped and flipped and lengths scaled by a power of two: exact in floating point, so a ray exactly on an
     edge (or through a polygon's diagonal) stays exactly on it and a degenerate triangle stays degenerate."""
