@@ -226,13 +226,13 @@ def reflect_test(name, points, **params) -> Test:
                 f"within {TOL.FLOAT64}", expected="none", truth=truth(truths.reflect), timeout=QUICK, vary=variant(variants.reflect))
 
 
-def refract_test(name, points, **params) -> Test:
+def refract_test(name, points, vary=None, **params) -> Test:
     return Test(name, "W9", points, "refract", params,
                 all_of([("total internal reflection", sub(checks.refract_mask)),
                         ("refracted directions", sub(checks.refract_directions))],
                        earn_with=["refracted directions"]),
                 f"TIR mask exact; directions within {TOL.FLOAT64} of Snell's law by angles", expected="none",
-                truth=truth(truths.refract), timeout=QUICK, vary=variant(variants.refract))
+                truth=truth(truths.refract), timeout=QUICK, vary=vary or variant(variants.refract))
 
 
 def fresnel_test(name, points, **params) -> Test:
@@ -397,7 +397,10 @@ TESTS = [
     shadow_test("W7 shadow_transmission: glass, a film, a stone, nothing", 5, SHADOW_SCENE, **SHADOW_SEGMENTS),
     shadow_test("W7 shadow_transmission: a checkerboard of two glasses", 2, CHECKER_SHADOW_SCENE, **CHECKER_SEGMENTS),
     reflect_test("W8 reflect: 20 random directions and normals", 2, **REFLECT),
-    refract_test("W9 refract: into glass (η = 1/1.5)", 3, **REFRACT_IN),
+    refract_test("W9 refract: into glass (η = 1/1.5)", 2, **REFRACT_IN),
+    refract_test("W9 refract: grazing at η = 1 (sin²θt = 1 exactly) is not total internal reflection; into glass beside",
+                 1, directions=[[1, 0, 0], [0, -1, 0], [0.6, 0.8, 0]] + _dirs[:5].tolist(), normals=[[0, 0, 1]] * 8,
+                 eta=[1.0] * 3 + [1 / 1.5] * 5, vary=variant(variants.refract_grazing)),
     refract_test("W9 refract: one η per ray (a list), η = 1 among them", 1, directions=_dirs.tolist() * 2,
                  normals=[[0, 0, 1]] * 48, eta=[1 / 1.33] * 24 + [1.0] * 24),
     refract_test("W9 refract: out of glass (η = 1.5), with total internal reflection", 2, **REFRACT_OUT),

@@ -327,6 +327,22 @@ def _refract_per_ray(p: dict, rng: np.random.Generator) -> Case:
                 f"{len(eta)} fresh directions, one η per ray ({int((eta == 1).sum())} of them 1)")
 
 
+def refract_grazing(p: dict, rng: np.random.Generator) -> Case:
+    """Fresh directions for the rays of η ≠ 1; the grazing rays of η = 1 (d·n = 0, so sin²θt = 1 exactly) and every
+    normal moved with axes swapped and flipped, which keeps them exact."""
+    move = ExactMove(rng)
+    eta = np.asarray(p["eta"], float)
+    case = _refract_per_ray(p, rng)
+    directions = np.asarray(case.params["directions"], float)
+    normals = np.asarray(move.vector(p["normals"]), float)
+    grazing = eta == 1.0
+    directions[grazing] = np.asarray(move.vector(p["directions"]), float)[grazing]
+    directions[~grazing] = _unit(rng.normal(size=(int((~grazing).sum()), 3)) * 0.4 - normals[~grazing])
+    return Case({"directions": np.round(directions, 12).tolist(), "normals": normals.tolist(),
+                 "eta": case.params["eta"]},
+                f"{int(grazing.sum())} grazing rays at η = 1 and {int((~grazing).sum())} fresh ones into glass")
+
+
 def fresnel(p: dict, rng: np.random.Generator) -> Case:
     """As many cosines from grazing (0) to normal (1), another index on the same side."""
     n, out_of_glass = len(p["cos_i"]), p["eta"] > 1
