@@ -70,10 +70,11 @@ def two_mirrors(reflectance: float, min_weight: float, max_depth: int) -> dict:
 
 
 def mirror_rays(reflectance: float, min_weight: float, max_depth: int) -> int:
-    """Reflection rays per camera ray between two mirrors: β = r^k is cast while β ≥ min_weight and k ≤ max_depth."""
-    k = 0
-    while k < max_depth and reflectance ** (k + 1) >= min_weight:
-        k += 1
+    """Reflection rays per camera ray between two mirrors: β = r^k is cast while β ≥ min_weight and k ≤ max_depth
+    (β multiplied by r once a bounce, as a tracer does, so that a cut-off equal to a weight is met exactly)."""
+    k, beta = 0, 1.0
+    while k < max_depth and beta * reflectance >= min_weight:
+        k, beta = k + 1, beta * reflectance
     return k
 
 
@@ -412,8 +413,9 @@ TESTS = [
                  {"camera": 1, "reflection": 0, "transmission": 0, "shadow": "some"}),
     counter_test("W11 trace: a light behind every surface, and one that sends nothing, cost no shadow ray", 2, LIGHT_BEHIND, (32, 24),
                  {"camera": 1, "shadow": 0}),
-    counter_test("W11 trace: the β cut-off between two mirrors (r = 0.5, cut-off 0.1)", 2, two_mirrors(0.5, 0.1, 10),
-                 (16, 12), {"camera": 1, "reflection": mirror_rays(0.5, 0.1, 10), "transmission": 0}),
+    counter_test("W11 trace: the β cut-off between two mirrors (r = 0.5, cut-off 0.125: the third weight is cast)", 2,
+                 two_mirrors(0.5, 0.125, 10), (16, 12),
+                 {"camera": 1, "reflection": mirror_rays(0.5, 0.125, 10), "transmission": 0}),
     counter_test("W11 trace: the depth limit between two mirrors (r = 0.9, cut-off 0.01, depth 3)", 1,
                  two_mirrors(0.9, 0.01, 3), (12, 8), {"camera": 1, "reflection": mirror_rays(0.9, 0.01, 3)}),
     image_test("W11 trace: Whitted's scene at depth 1 (the mirror still shows the floor), 64×48", 1,

@@ -364,8 +364,11 @@ def counters(p: dict, rng: np.random.Generator, expect: dict) -> Case:
         case = render(p, rng)
         return Case(case.params, case.describe)
     options = p["scene"]["options"]["whitted"]
-    if options["max_depth"] > 5:   # the β cut-off binds
-        r, cut, depth = num(rng.uniform(0.4, 0.7), 3), num(rng.uniform(0.05, 0.2), 3), options["max_depth"]
+    if options["max_depth"] > 5:   # the β cut-off binds, exactly at a weight (r·r·r, as the tracer multiplies)
+        r, depth = num(rng.uniform(0.4, 0.7), 3), options["max_depth"]
+        cut = 1.0
+        for _ in range(int(rng.integers(2, 5))):
+            cut *= r
     else:                          # the depth limit binds
         r, cut, depth = num(rng.uniform(0.8, 0.95), 3), options["min_weight"], int(rng.integers(2, 5))
     fresh = {**expect, "reflection": mirror_rays(r, cut, depth)}
