@@ -45,9 +45,11 @@ LIGHT_BEHIND = {
     "ambient": [0.3, 0.3, 0.3],
     "lights": [{"type": "point", "position": [0.5, -4, 0.2]},         # under the floor: behind every surface it lights
                {"type": "point", "position": [0, 4, 1], "diffuse": [0, 0, 0], "specular": [0, 0, 0]}],  # sends nothing
-    "materials": {"floor": {"diffuse": [0.7, 0.7, 0.7], "ambient": [0.5, 0.5, 0.5]},
+    "materials": {"black": {"diffuse": [0, 0, 0], "specular": [0, 0, 0], "ambient": [0.3, 0.3, 0.3]},
+                  "floor": {"diffuse": [0.7, 0.7, 0.7], "ambient": [0.5, 0.5, 0.5]},
                   "tile": {"diffuse": [0.2, 0.5, 0.9], "ambient": [0.2, 0.5, 0.9], "specular": [0.5, 0.5, 0.5], "shininess": 20}},
-    "objects": [{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "material": "floor", "checker": 0.5,
+    "objects": [{"type": "sphere", "center": [0, 0.8, 0], "radius": 0.5, "material": "black"},  # lit from below: no shadow ray
+                {"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "material": "floor", "checker": 0.5,
                  "checker_material": "tile"},
                 {"type": "polygon", "vertices": [[-1, 0.5, 1], [1, 0.5, 1], [1, 0.5, -1], [-1, 0.5, -1]], "material": "tile"}],
 }
@@ -411,15 +413,19 @@ TESTS = [
     image_test("W11 trace: Whitted's scene, 96×72", 5, WHITTED, (96, 72)),
     counter_test("W11 trace: no mirror or glass casts no secondary ray (Cornell box, 32×32)", 2, CORNELL, (32, 32),
                  {"camera": 1, "reflection": 0, "transmission": 0, "shadow": "some"}),
-    counter_test("W11 trace: a light behind every surface, and one that sends nothing, cost no shadow ray", 2, LIGHT_BEHIND, (32, 24),
+    counter_test("W11 trace: no shadow ray toward a light behind every surface, from one that sends nothing, or from a black sphere", 2, LIGHT_BEHIND, (32, 24),
                  {"camera": 1, "shadow": 0}),
     counter_test("W11 trace: the β cut-off between two mirrors (r = 0.5, cut-off 0.125: the third weight is cast)", 2,
                  two_mirrors(0.5, 0.125, 10), (16, 12),
                  {"camera": 1, "reflection": mirror_rays(0.5, 0.125, 10), "transmission": 0}),
     counter_test("W11 trace: the depth limit between two mirrors (r = 0.9, cut-off 0.01, depth 3)", 1,
                  two_mirrors(0.9, 0.01, 3), (12, 8), {"camera": 1, "reflection": mirror_rays(0.9, 0.01, 3)}),
-    image_test("W11 trace: Whitted's scene at depth 1 (the mirror still shows the floor), 64×48", 1,
-               bundled("whitted", options={"whitted": {"max_depth": 1, "min_weight": 0.01, "spp": 1}}), (64, 48)),
+    image_test("W11 trace: Whitted's scene at depth 1 (the mirror still shows the floor), a light with no highlight "
+               "and one with only a highlight, 64×48", 1,
+               bundled("whitted", options={"whitted": {"max_depth": 1, "min_weight": 0.01, "spp": 1}},
+                       lights=[{"type": "point", "position": [-4, 8, 6], "diffuse": [0.9, 0.9, 0.9], "specular": [0, 0, 0]},
+                               {"type": "point", "position": [5, 6, 3], "diffuse": [0, 0, 0], "specular": [0.8, 0.8, 0.8]}]),
+               (64, 48)),
     lens_test("W12 thin_lens (optional): a camera on the z axis, lens radius 0.1, focused at 5", 3,
               camera={"eye": [0, 0, 5], "center": [0, 0, 0], "up": [0, 1, 0], "fovy": 40}, directions=LENS_RAYS,
               aperture=0.1, focus=5.0, u=LENS_U),
