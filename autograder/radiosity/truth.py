@@ -119,6 +119,15 @@ def shoot_by_hand(i: int, F, areas, reflectance, radiosity, unshot) -> tuple[lis
     return B, dB
 
 
+def overshoot_by_hand(i: int, F, areas, reflectance, B: list, dB: list, overshoot: float) -> tuple[list, list]:
+    """One shot of ω·ΔB_i, leaving (1 − ω)·ΔB_i unshot at patch i (ω = 1: a plain shot)."""
+    left = [(1 - overshoot) * x for x in dB[i]]
+    dB[i] = [overshoot * x for x in dB[i]]
+    B, dB = shoot_by_hand(i, F, areas, reflectance, B, dB)
+    dB[i] = left
+    return B, dB
+
+
 def progressive_by_hand(F, areas, reflectance, emission, tolerance: float, max_shots: int,
                         overshoot: float = 1.0, stop_within_sweeps: bool = True) -> tuple[np.ndarray, np.ndarray, list[int]]:
     """The notes' shooting loop (§2.5) with a sort for each sweep's order (keys at its start; ties to the lower index).
@@ -141,10 +150,7 @@ def progressive_by_hand(F, areas, reflectance, emission, tolerance: float, max_s
             checked = stop_within_sweeps or i == sweep[0]
             if len(order) >= max_shots or (checked and sum(keys()) <= tolerance * emitted):
                 return np.array(B), np.array(dB), order
-            left = [(1 - overshoot) * x for x in dB[i]]
-            dB[i] = [overshoot * x for x in dB[i]]
-            B, dB = shoot_by_hand(i, F, areas, reflectance, B, dB)
-            dB[i] = left
+            B, dB = overshoot_by_hand(i, F, areas, reflectance, B, dB, overshoot)
             order.append(i)
     return np.array(B), np.array(dB), order
 
@@ -162,10 +168,7 @@ def largest_first_by_hand(F, areas, reflectance, emission, tolerance: float, max
         i = max(range(len(keys)), key=lambda j: (keys[j], -j))
         if sum(keys) <= tolerance * emitted or keys[i] <= 0:
             break
-        left = [(1 - overshoot) * x for x in dB[i]]
-        dB[i] = [overshoot * x for x in dB[i]]
-        B, dB = shoot_by_hand(i, F, areas, reflectance, B, dB)
-        dB[i] = left
+        B, dB = overshoot_by_hand(i, F, areas, reflectance, B, dB, overshoot)
         order.append(i)
     return np.array(B), np.array(dB), order
 
