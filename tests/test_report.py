@@ -63,3 +63,27 @@ def test_what_a_submission_writes_is_shown_as_text_never_run():
     html = render_report(_result((_test(hostile, "W11.4"), Verdict(0.0, hostile))))
     assert "<script>alert(1)" not in html and "<img src=x" not in html
     assert "&lt;script&gt;alert(1)&lt;/script&gt;" in html
+
+
+def test_an_optional_extension_is_reported_on_its_own_line_and_never_moves_the_grade():
+    """W12 (optional) passed, W11 failed: the grade is W11's alone in the table, the report, results.json's sum and
+    the gradebook row; the extension's points are shown beside it and travel in results.json's extra_data."""
+    from dataclasses import replace
+
+    from cs451.grading.results import format_table, to_gradescope, total_score
+    from cs451.grading.roster import _row
+    main = _test("main", "W11.1", 4.0)
+    extra = replace(Spec("lens", "W12", 5.0, "thin_lens", {}, check(close_to, key="origins"), "tol", number="W12.1"),
+                    extension=True)
+    result = _result((main, Verdict(0.0, "image differs")), (extra, Verdict(1.0, "ok")))
+    assert (result.score, result.max_score, result.extension_score, result.extension_max) == (0, 4, 5, 5)
+    table = format_table(result)
+    assert "total: 0 / 4" in table and "optional extension W12: 5 / 5 (not part of the grade)" in table
+    assert "Optional extension W12: 5 / 5 (not part of the grade)." in render_report(result)
+    data = to_gradescope(result)
+    lens = next(t for t in data["tests"] if t["number"] == "W12.1")
+    assert (lens["score"], lens["max_score"], lens["extra_data"]) == (0.0, 0.0, {"extension": True, "score": 5.0,
+                                                                                  "max_score": 5.0})
+    assert total_score(data) == 0
+    row = _row("alice", result, ["W11", "W12"])
+    assert (row["score"], row["max_score"], row["extension"], row["W12"]) == (0, 4, 5, 5)
