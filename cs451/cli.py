@@ -130,13 +130,10 @@ def _cmd_demo(a: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_slides(a: argparse.Namespace) -> int:
-    from .slides.build import build_summary, timed_build
-    built, seconds = timed_build(output=a.output, deck=a.deck, cache=a.cache, quick=a.quick)
-    for b in built:
-        print(f"wrote {b.path} ({b.slides} slides, {b.figures} figures, {b.bytes / 1e6:.1f} MB)")
-    print(build_summary(built, seconds) + "; each file opens offline (open it in a browser; ?print-pdf to print)")
-    return 0
+def slides_commands():
+    """The slides' commands (lecturer-only: a student's release has no cs451/slides)."""
+    from .slides import commands
+    return commands
 
 
 def _cmd_warm(a: argparse.Namespace) -> int:
@@ -357,7 +354,25 @@ def build_parser() -> argparse.ArgumentParser:
     slb.add_argument("-o", "--output", required=True, help="folder for the HTML files (one per deck)")
     slb.add_argument("--cache", help="folder for the rendered figures (default: .cs451-cache/slides in the kit)")
     slb.add_argument("--quick", action="store_true", help="small, fast figures (drafts)")
-    slb.set_defaults(func=_cmd_slides)
+    slb.set_defaults(func=lambda a: slides_commands().cmd_build(a))
+    slc = slsub.add_parser("check", help="measure the decks in headless Chromium as a projector shows them",
+                           description="Build the decks and measure every slide at 1920×1080 and 1280×720 in headless "
+                                       "Chromium: text under 24 px, code under 20 px or wrapped, figure text under "
+                                       "16 px, figures with fewer than 2 pixels per slide pixel, anything under the "
+                                       "navigation controls. Exits 1 if any is found.")
+    slc.add_argument("deck", nargs="?", help=f"overview, {', '.join(stages)} (default: all)")
+    slc.add_argument("--cache", help="folder for the rendered figures (default: .cs451-cache/slides in the kit)")
+    slc.add_argument("--quick", action="store_true", help="small, fast figures (drafts; figures then fail the density floor)")
+    slc.add_argument("--json", metavar="FILE", help="also write the measurements to FILE")
+    slc.set_defaults(func=lambda a: slides_commands().cmd_check(a))
+    slp = slsub.add_parser("pdf", help="print the decks to PDF (one slide a page) with headless Chromium",
+                           description="Build the decks and print each to a PDF, one slide a page, in headless Chromium "
+                                       "once reveal.js has laid them out for print.")
+    slp.add_argument("deck", nargs="?", help=f"overview, {', '.join(stages)} (default: all)")
+    slp.add_argument("-o", "--output", required=True, help="a .pdf file for one deck, or a folder (one PDF per deck)")
+    slp.add_argument("--cache", help="folder for the rendered figures (default: .cs451-cache/slides in the kit)")
+    slp.add_argument("--quick", action="store_true", help="small, fast figures (drafts)")
+    slp.set_defaults(func=lambda a: slides_commands().cmd_pdf(a))
     return p
 
 

@@ -25,7 +25,7 @@ from .. import KIT_ROOT, __version__
 from ..caches import kit_cache
 from ..errors import KitError
 from ..progress import Progress
-from .deck import Deck, deck_files, deck_name, read_deck
+from .deck import Deck, Picture, deck_files, deck_name, read_deck
 
 HERE = Path(__file__).resolve().parent
 VENDOR = HERE / "vendor"
@@ -135,13 +135,30 @@ def _figures_module() -> Any:
     return figures
 
 
-def render_figures(decks: list[Deck], cache: Path, quick: bool) -> dict[str, str]:
-    """Every figure the decks name, as a data: URL; unknown names fail with the deck's file and line."""
+def picture(path: Path) -> Picture:
+    """A PNG (or another image) as the page shows it: inlined, with its size and, for the kit's figures, the
+    smallest text drawn in it (the ``cs451:text_px`` chunk ``figures.py`` writes)."""
+    from PIL import Image
+
+    data = path.read_bytes()
+    text_px = None
+    try:
+        with Image.open(path) as image:
+            width, height = image.size
+            chunk = getattr(image, "text", {}).get("cs451:text_px")
+            text_px = float(chunk) if chunk is not None else None
+    except (OSError, ValueError):
+        width = height = 0                      # an SVG: the browser sizes it
+    return Picture(_data_url(data, MIME[path.suffix.lower()]), width, height, text_px)
+
+
+def render_figures(decks: list[Deck], cache: Path, quick: bool) -> dict[str, Picture]:
+    """Every figure the decks name, as a picture; unknown names fail with the deck's file and line."""
     needed = [ref for d in decks for ref in d.figures]
-    urls: dict[str, str] = {}
+    urls: dict[str, Picture] = {}
     for d in decks:
         for rel, path in d.images.items():
-            urls[rel] = _data_url(path.read_bytes(), MIME[path.suffix.lower()])
+            urls[rel] = picture(path)
     if not needed:
         return urls
     module = _figures_module()
@@ -169,7 +186,7 @@ def render_figures(decks: list[Deck], cache: Path, quick: bool) -> dict[str, str
                 raise KitError(f"{ref.file}:{ref.line}: figure {name!r} failed: {type(err).__name__}: {err}") from err
             if not png.is_file():
                 raise KitError(f"figure {name!r}: render_figure returned {png}, which is not a file")
-            urls[f"figure:{name}"] = _data_url(png.read_bytes(), "image/png")
+            urls[f"figure:{name}"] = picture(png)
             bar.advance(1, note=name)
     finally:
         bar.close()

@@ -6,10 +6,9 @@ from __future__ import annotations
 import contextlib
 import io
 import json
-import sys
 from pathlib import Path
 from dataclasses import dataclass
-from typing import Any, Callable, Iterator
+from typing import Any, Callable
 
 import numpy as np
 
@@ -19,8 +18,18 @@ from ..imageio import to_uint8
 from ..scene import BUNDLED_DIR
 from . import registry
 
-#: Pixels per inch of every matplotlib canvas: figure sizes below are in pixels.
+#: Pixels per inch of every matplotlib canvas, in the slide's own pixels: figure sizes below are slide pixels.
 DPI = 100
+#: Device pixels per slide pixel: every figure is drawn at twice the size it is shown (a 1920 × 1080 projector
+#: shows a slide pixel as 1.5 screen pixels, so nothing is ever enlarged), and pictures laid into a figure
+#: (renders, item buffers) are made at twice their shown size too.
+SCALE = 2
+#: The smallest text a figure may hold, in points: 12 pt is 16.7 slide pixels, 16 screen pixels on a 1280 × 720
+#: screen (tests/test_slides_readability.py).
+MIN_FONT_PT = 12.0
+#: The size (device pixels) of every text drawn on a canvas since the figure began (``figures.py`` keeps the
+#: smallest in the PNG, for the readability check). One figure is drawn at a time.
+TEXT_PX: list[float] = []
 
 
 def reference_impl(stage: str) -> Any:
@@ -70,13 +79,21 @@ def new_canvas(width: int, height: int) -> Any:
         from matplotlib.figure import Figure
     except ImportError:
         raise KitError("the slides' figures draw with matplotlib: pip install -e '.[bench]'") from None
-    fig = Figure(figsize=(width / DPI, height / DPI), dpi=DPI, facecolor="white")
+    fig = Figure(figsize=(width / DPI, height / DPI), dpi=DPI * SCALE, facecolor="white")
     FigureCanvasAgg(fig)
     return fig
 
 
 def canvas_pixels(fig: Any) -> np.ndarray:
+    """The canvas as uint8 RGB (device pixels), noting the size of every visible text on it in :data:`TEXT_PX`."""
+    from matplotlib.text import Text
+
     fig.canvas.draw()
+    for text in fig.findobj(Text):
+        shown = text.get_visible() and text.get_text().strip()
+        if shown and (text.axes is None or (text.axes.get_visible() and text.axes.axison)
+                      or text in text.axes.texts or text is text.axes.title):
+            TEXT_PX.append(text.get_fontsize() * fig.dpi / 72)
     return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
 
 
@@ -95,29 +112,31 @@ class Panel:
 
 
 def panel_grid(rows: list[list[Panel]], title: str = "", pad: int = 10, min_width: int = 150,
-          font: float = 9.0) -> np.ndarray:
-    """Panels at their own pixel size (no resampling) in rows, each caption above its panel, a title on top."""
-    band = 8 + 15 * max(p.caption.count("\n") + 1 for row in rows for p in row)
-    cell_w = max(min_width, max(p.image.shape[1] for row in rows for p in row))
-    heights = [max(p.image.shape[0] for p in row) for row in rows]
+          font: float = MIN_FONT_PT) -> np.ndarray:
+    """Panels in rows, each caption above its panel, a title on top; a panel's pixels are device pixels
+    (:data:`SCALE` to a slide pixel), laid in without resampling. Sizes here are slide pixels."""
+    band = 8 + round(font * 1.75) * max(p.caption.count("\n") + 1 for row in rows for p in row)
+    size = {id(p): (p.image.shape[0] / SCALE, p.image.shape[1] / SCALE) for row in rows for p in row}
+    cell_w = max(min_width, max(size[id(p)][1] for row in rows for p in row))
+    heights = [max(size[id(p)][0] for p in row) for row in rows]
     columns = max(len(row) for row in rows)
-    top = 10 + 18 * (title.count("\n") + 1) if title else 0
+    top = 10 + round((font + 2) * 1.6) * (title.count("\n") + 1) if title else 0
     width = columns * cell_w + (columns + 1) * pad
     height = top + sum(heights) + len(rows) * band + (len(rows) + 1) * pad
     fig = new_canvas(width, height)
     for r, row in enumerate(rows):
         row_x = (columns - len(row)) * (cell_w + pad) // 2           # a shorter row is centred
         for c, panel in enumerate(row):
-            h, w = panel.image.shape[:2]
-            x = row_x + pad + c * (cell_w + pad) + (cell_w - w) // 2
+            h, w = size[id(panel)]
+            x = row_x + pad + c * (cell_w + pad) + (cell_w - w) / 2
             y = top + pad + sum(heights[:r]) + r * (band + pad) + band
             ax = fig.add_axes((x / width, 1 - (y + h) / height, w / width, h / height))
             ax.imshow(panel.image, interpolation="nearest")
             ax.set_axis_off()
             if panel.overlay is not None:
                 panel.overlay(ax)
-            ax.set_xlim(-0.5, w - 0.5)
-            ax.set_ylim(h - 0.5, -0.5)
+            ax.set_xlim(-0.5, panel.image.shape[1] - 0.5)
+            ax.set_ylim(panel.image.shape[0] - 0.5, -0.5)
             if panel.caption:
                 fig.text((x + w / 2) / width, 1 - (y - 4) / height, panel.caption, ha="center", va="bottom",
                          fontsize=font, linespacing=1.2)

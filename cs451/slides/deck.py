@@ -14,8 +14,9 @@ builder (which typesets, renders and pulls them) instead of being guessed from f
 - a ``pseudo`` code block: pseudo-code in the kit's words; a line ending in ``[[text]]`` points at the line
   of the slide's ``reference`` listing that contains ``text`` (the first such line after the one the pointer
   before it found, else the first), and both get the same number.
-- a ``reference`` code block: ``reference/<stage>/<file>.py::function`` and optionally ``from: text`` and
-  ``to: text`` (see ``listing.py``).
+- a ``reference`` code block: ``reference/<stage>/<file>.py::function`` and optionally ``from: text``,
+  ``to: text`` and ``width: CHARACTERS`` (where long lines fold; 80, a whole slide, unless the listing sits
+  in a column; see ``listing.py``).
 - ``|||`` on a line of its own: what follows goes into the next column.
 """
 from __future__ import annotations
@@ -27,7 +28,7 @@ from pathlib import Path
 from typing import Callable
 
 from ..errors import KitError
-from .listing import Listing, read_listing
+from .listing import FOLD_WIDTH, Listing, read_listing
 from .inline import inline_html
 
 DECK_FILE = re.compile(r"^(\d\d)-([a-z][a-z0-9-]*)\.md$")
@@ -38,7 +39,7 @@ ATTRIBUTE = re.compile(r"^(height|width)=(\d+)(%?)$")
 POINTER = re.compile(r"\s*\[\[(.+?)\]\]\s*$")
 FENCE = "```"
 CODE_LANGUAGES = {"", "python", "glsl", "c", "text", "sh", "json"}
-LISTING_KEYS = {"from", "to"}
+LISTING_KEYS = {"from", "to", "width"}
 
 
 @dataclass(frozen=True)
@@ -70,8 +71,18 @@ class Deck:
     images: dict[str, Path]
 
 
-#: How a figure's picture reaches the HTML: (``figure:NAME`` or a path, where) -> a ``data:`` URL.
-Resolver = Callable[[str, str], str]
+@dataclass(frozen=True)
+class Picture:
+    """A figure's picture as the page gets it: a ``data:`` URL, its pixel size, and the size of the smallest
+    text drawn in it (PNG pixels; None where it has no text or does not say)."""
+    url: str
+    width: int
+    height: int
+    text_px: float | None = None
+
+
+#: How a figure's picture reaches the HTML: (``figure:NAME`` or a path, where) -> the picture.
+Resolver = Callable[[str, str], Picture]
 
 
 def deck_files(kit_root: Path) -> list[Path]:
@@ -295,11 +306,14 @@ class _Reader:
             if not path.is_file() or path.suffix.lower() not in (".png", ".jpg", ".jpeg", ".svg"):
                 raise KitError(f"{where}: {target}: no such image beside the deck (.png, .jpg or .svg)")
             self.deck.images[target] = path
-        src = self.resolve(target, where) if self.resolve else ""
+        picture = self.resolve(target, where) if self.resolve else Picture("", 0, 0)
+        if picture.width:           # drawn at twice the slide's pixels: shown at half its size, or smaller
+            style.append(f"width:min(100%,{picture.width / 2:g}px)")
         style_attr = f' style="{";".join(style)}"' if style else ""
+        text = f' data-text-px="{picture.text_px:g}"' if picture.text_px is not None else ""
         cap = f"<figcaption>{inline_html(caption, where)}</figcaption>" if caption else ""
-        return (f'<figure class="figure" data-figure="{escape(target)}"><img src="{src}" alt="{escape(caption)}"'
-                f"{style_attr}>{cap}</figure>")
+        return (f'<figure class="figure" data-figure="{escape(target)}"><img src="{picture.url}" '
+                f'alt="{escape(caption)}"{text}{style_attr}>{cap}</figure>')
 
     def code(self, n: int, lang: str, inner: list[tuple[int, str]]) -> str:
         if lang not in CODE_LANGUAGES:
@@ -316,9 +330,14 @@ class _Reader:
         for m, t in spec[1:]:
             key, sep, value = t.partition(":")
             if not sep or key.strip() not in LISTING_KEYS or not value.strip():
-                raise KitError(f"{self.where(m)}: {t!r}: a reference block takes `from: text` and `to: text` only")
+                raise KitError(f"{self.where(m)}: {t!r}: a reference block takes `from: text`, `to: text` and "
+                               "`width: CHARACTERS` only")
             options[key.strip()] = value.strip()
-        return read_listing(self.kit_root, spec[0][1], options.get("from"), options.get("to"), self.where(spec[0][0]))
+        width = options.get("width", str(FOLD_WIDTH))
+        if not width.isdigit() or not 30 <= int(width) <= FOLD_WIDTH:
+            raise KitError(f"{self.where(spec[0][0])}: width: {width}: a listing is 30 to {FOLD_WIDTH} characters wide")
+        return read_listing(self.kit_root, spec[0][1], options.get("from"), options.get("to"), self.where(spec[0][0]),
+                            int(width))
 
     def listing_html(self, listing: Listing) -> str:
         rows = []
@@ -326,11 +345,12 @@ class _Reader:
             if entry is None:
                 rows.append('<span class="line gap"><span class="ln"></span>⋯</span>')
                 continue
-            number, html = entry
+            number, parts = entry
             marks = "".join(f'<span class="pointer">{p}</span>' for p in self.marks.get((id(listing), number), []))
             cls = "line linked" if marks else "line"
-            rows.append(f'<span class="{cls}" data-line="{number}"><span class="ln">{number}</span>{html or " "}'
-                        f"{marks}</span>")
+            for k, html in enumerate(parts):      # a folded line: its first row has the number and the marks
+                rows.append(f'<span class="{cls}{" cont" if k else ""}" data-line="{number}"><span class="ln">'
+                            f'{number}</span>{html or " "}{"" if k else marks}</span>')
         caption = (f"<code>{escape(listing.path)}</code> · <code>{escape(listing.function)}</code> · "
                    f"{listing.span}")
         return (f'<figure class="listing"><figcaption>{caption}</figcaption>'

@@ -36,9 +36,9 @@ from ..errors import KitError
 from ..impl import earlier_stage_impl
 from ..progress import Progress
 from ..scene import BUNDLED_DIR
-from . import registry
+from . import canvas, registry
 from .registry import SPECS, Drawn, Spec, spec_of
-FORMAT = 1
+FORMAT = 2                  # 2: figures at twice their shown size, with their smallest text noted
 
 # --- the cache ------------------------------------------------------------------------------------------
 
@@ -99,18 +99,19 @@ def render_figure(name: str, cache: Path, quick: bool = False) -> Path:
     if path.is_file():
         return path
     bar = Progress(f"figure {name}", spec.steps)
+    canvas.TEXT_PX.clear()
     try:
         drawn = spec.draw(bar, **(spec.quick if quick else spec.full))
     finally:
         bar.close()
-    _write_png(path, drawn, spec, key)
+    _write_png(path, drawn, spec, key, min(canvas.TEXT_PX, default=None))
     for old in cache.glob(f"{stem}-*.png"):
         if old != path and re.fullmatch(rf"{re.escape(stem)}-[0-9a-f]{{16}}", old.stem):
             old.unlink(missing_ok=True)
     return path
 
 
-def _write_png(path: Path, drawn: Drawn, spec: Spec, key: str) -> None:
+def _write_png(path: Path, drawn: Drawn, spec: Spec, key: str, text_px: float | None) -> None:
     """Write through a temporary file of our own, so that a reader never sees half a PNG."""
     from PIL import Image, PngImagePlugin
 
@@ -119,6 +120,8 @@ def _write_png(path: Path, drawn: Drawn, spec: Spec, key: str) -> None:
     info.add_text("Description", spec.description)
     info.add_text("cs451:key", key)
     info.add_text("cs451:facts", json.dumps(drawn.facts, sort_keys=True, default=float))
+    # the smallest text drawn on a canvas, in the PNG's pixels, 0 for none (the readability check)
+    info.add_text("cs451:text_px", f"{text_px or 0:.2f}")
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=".png", dir=path.parent)
     try:

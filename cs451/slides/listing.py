@@ -15,23 +15,30 @@ import keyword
 import re
 import tokenize
 from dataclasses import dataclass
-from html import escape
+from html import escape, unescape
 from pathlib import Path
 
 from .. import SPEED_LAYER
 from ..errors import KitError
 
-#: More lines than this do not fit a slide beside pseudo-code: the build asks for a ``from:``/``to:`` range.
-MAX_LINES = 30
+#: More lines than this do not fit a slide (code is set at 22 px): the build asks for a ``from:``/``to:`` range.
+MAX_LINES = 16
+#: Characters a listing line may hold across a whole slide at 22 px; longer lines are folded where Python
+#: allows (after a comma or before an operator inside brackets), never wrapped by the browser. A ``width:``
+#: line in the reference block narrows it for a listing in a column.
+FOLD_WIDTH = 80
 MARKER = re.compile(r"^\s*# (BEGIN|END) SOLUTION\b")
 
 
 @dataclass(frozen=True)
 class Listing:
-    """Lines of one function of the reference: ``(line number in the file, html of the line)``; None is a gap."""
+    """Lines of one function of the reference: ``(line number in the file, html of its rows)``; None is a gap.
+
+    A line longer than the slide is folded into rows as a formatter would fold it (``fold_line``); the rows
+    after the first continue it and carry no number."""
     path: str
     function: str
-    lines: tuple[tuple[int, str] | None, ...]
+    lines: tuple[tuple[int, tuple[str, ...]] | None, ...]
     texts: dict[int, str]
 
     def find(self, snippet: str, after: int = 0) -> int | None:
@@ -59,12 +66,35 @@ def _function_node(tree: ast.Module, qualname: str) -> ast.FunctionDef | ast.Asy
     return node if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) else None
 
 
-def _highlighted(source: str) -> dict[int, str]:
-    """Every line of ``source`` as HTML, with keywords, comments, strings and numbers in classes of their own."""
+Spans = dict[int, list[tuple[int, int, str]]]
+
+
+def _spans(source: str) -> tuple[Spans, dict[tuple[int, int], int]]:
+    """Per line, the (start, end, kind) of keywords, comments, strings and numbers; and where a line may be
+    folded: {(line, column): bracket depth} after each comma and before each binary operator inside brackets."""
     lines = source.splitlines()
-    spans: dict[int, list[tuple[int, int, str]]] = {}
+    spans: Spans = {}
+    breaks: dict[tuple[int, int], int] = {}
+    depth = 0
     try:
         for tok in tokenize.generate_tokens(io.StringIO(source).readline):
+            if tok.type == tokenize.OP:
+                if tok.string in "([{":
+                    depth += 1
+                elif tok.string in ")]}":
+                    depth -= 1
+                elif tok.string == ",":
+                    breaks[(tok.end[0], tok.end[1] + 1)] = depth
+                elif tok.string in BREAK_BEFORE:
+                    breaks[tok.start] = depth
+            if tok.type == tokenize.NAME and tok.string in ("and", "or") or (
+                    tok.type == tokenize.NAME and depth > 0 and tok.string in ("if", "else", "for")):
+                breaks[tok.start] = depth
+            if tok.type == tokenize.STRING and tok.start[0] != tok.end[0]:      # shader source: free-form text
+                for r in range(tok.start[0] + 1, tok.end[0]):
+                    for col, ch in enumerate(lines[r - 1]):
+                        if ch == " " and col > 0 and lines[r - 1][col - 1] != " ":
+                            breaks[(r, col + 1)] = 1
             kind = ("kw" if tok.type == tokenize.NAME and keyword.iskeyword(tok.string) else
                     "com" if tok.type == tokenize.COMMENT else "str" if tok.type == tokenize.STRING else
                     "num" if tok.type == tokenize.NUMBER else None)
@@ -76,22 +106,92 @@ def _highlighted(source: str) -> dict[int, str]:
                 end = c1 if r == r1 else len(lines[r - 1])
                 spans.setdefault(r, []).append((start, end, kind))
     except (tokenize.TokenError, SyntaxError, IndexError):
-        spans = {}
-    out: dict[int, str] = {}
-    for number, text in enumerate(lines, 1):
-        html, at = [], 0
-        for start, end, kind in sorted(spans.get(number, [])):
-            if start < at:
-                continue
-            html.append(escape(text[at:start]))
-            html.append(f'<span class="{kind}">{escape(text[start:end])}</span>')
-            at = end
-        html.append(escape(text[at:]))
-        out[number] = "".join(html)
-    return out
+        spans, breaks = {}, {}
+    return spans, breaks
 
 
-def read_listing(kit_root: Path, target: str, start: str | None, stop: str | None, where: str) -> Listing:
+BREAK_BEFORE = {"+", "-", "*", "/", "//", "@", "==", "!=", "<", "<=", ">", ">=", "if", "else"}
+
+
+def _html(text: str, spans: list[tuple[int, int, str]], lo: int, hi: int) -> str:
+    """Columns ``lo``..``hi`` of one line as HTML, highlighted."""
+    html, at = [], lo
+    for start, end, kind in sorted(spans):
+        start, end = max(start, lo), min(end, hi)
+        if start >= end or start < at:
+            continue
+        html.append(escape(text[at:start]))
+        html.append(f'<span class="{kind}">{escape(text[start:end])}</span>')
+        at = end
+    html.append(escape(text[at:hi]))
+    return "".join(html)
+
+
+def fold_line(text: str, width: int, breaks: dict[int, int], comment_at: int | None = None) -> list[tuple[int, int, int]]:
+    """Where to fold one source line of more than ``width`` characters: rows as (start column, end column,
+    indent), each row at most ``width`` wide where a fold point allows it.
+
+    ``breaks`` maps the columns where the line may continue to their bracket depth: inside brackets (depth
+    1 and more) Python joins the rows by itself, and the shallowest fold that fits is taken, the last of them
+    (as black and PEP 8 fold); outside brackets (depth 0) only where nothing inside fits, and the row then ends
+    in a backslash. A trailing comment that does not fit goes to a row of its own; a continuation row is
+    indented 8 more than the line.
+    """
+    indent = len(text) - len(text.lstrip(" "))
+    rows: list[tuple[int, int, int]] = []
+    start, row_indent = 0, 0
+    end_of_code = len(text) if comment_at is None else len(text[:comment_at].rstrip())
+    while end_of_code - start > width - row_indent:
+        room = width - row_indent
+        fits = [(d, c) for c, d in breaks.items() if start < c < end_of_code and (
+            c - start <= room if d > 0 else len(text[:c].rstrip()) - start + 2 <= room)]
+        inside = [(d, c) for d, c in fits if d > 0]
+        chosen = inside or fits
+        if not chosen:
+            break
+        shallow = min(d for d, _ in chosen)
+        cut = max(c for d, c in chosen if d == shallow)
+        rows.append((start, len(text[:cut].rstrip()), row_indent if shallow > 0 else -1 - row_indent))
+        start, row_indent = cut, indent + 8
+        while start < len(text) and text[start] == " ":
+            start += 1
+    if comment_at is not None and len(text) - start + row_indent > width and end_of_code > start:
+        rows.append((start, end_of_code, row_indent))
+        rows.append((comment_at, len(text), indent if not rows[:-1] else indent + 8))
+    else:
+        rows.append((start, len(text), row_indent))
+    return rows
+
+
+def _rows(number: int, text: str, spans: Spans, breaks: dict[tuple[int, int], int], width: int) -> tuple[str, ...]:
+    """One source line as the HTML of its rows on the slide: itself, or folded (code at its fold points, a
+    comment at its words, each further comment row starting with ``#`` again)."""
+    if len(text) <= width:
+        return (_html(text, spans.get(number, []), 0, len(text)),)
+    line_spans = spans.get(number, [])
+    comment = next((c0 for c0, _, kind in sorted(line_spans) if kind == "com"), None)
+    cols = {c: d for (n, c), d in breaks.items() if n == number}
+    out: list[str] = []
+    rows = ([(comment, len(text), comment)] if comment is not None and not text[:comment].strip()
+            else fold_line(text, width, cols, comment))
+    for lo, hi, indent in rows:
+        backslash = indent < 0                      # folded outside brackets: Python needs the backslash
+        indent = -1 - indent if backslash else indent
+        if comment is not None and lo >= comment and hi - lo + indent > width:
+            words, row = text[lo:hi].lstrip("# ").split(), "#"
+            for word in words:
+                if len(row) + 1 + len(word) + indent > width and row != "#":
+                    out.append(" " * indent + f'<span class="com">{escape(row)}</span>')
+                    row = "#"
+                row += " " + word
+            out.append(" " * indent + f'<span class="com">{escape(row)}</span>')
+        else:
+            out.append(" " * indent + _html(text, line_spans, lo, hi) + (" \\" if backslash else ""))
+    return tuple(out)
+
+
+def read_listing(kit_root: Path, target: str, start: str | None, stop: str | None, where: str,
+                 width: int = FOLD_WIDTH) -> Listing:
     """The lines of ``target`` (``reference/<stage>/<file>.py::function``, or a file of a stage's speed layer,
     ``cs451/stages/<stage>/accel/<file>.py``) from ``start`` to ``stop``.
 
@@ -139,16 +239,23 @@ def read_listing(kit_root: Path, target: str, start: str | None, stop: str | Non
                 raise KitError(f"{where}: to: {stop!r} is in no line of {target} after its from: line")
         body = body[lo:hi + 1]
         signature = []                  # a range stands alone: the caption names the function
-    html = _highlighted(source)
-    shown: list[tuple[int, str] | None] = []
+    spans, breaks = _spans(source)
+    shown: list[tuple[int, tuple[str, ...]] | None] = []
     previous = None
     for n in signature + body:
         skipped_markers_only = previous is not None and all(MARKER.match(texts[m]) for m in range(previous + 1, n))
         if previous is not None and n != previous + 1 and not skipped_markers_only:
             shown.append(None)          # lines left out (the docstring, a from: range): a visible gap
-        shown.append((n, html[n]))
+        shown.append((n, _rows(n, texts[n], spans, breaks, width)))
         previous = n
-    if len([s for s in shown if s]) > MAX_LINES:
-        raise KitError(f"{where}: {target} shows {len([s for s in shown if s])} lines, more than a slide holds "
-                       f"({MAX_LINES}): choose a range with from: and to:")
+    rows = sum(len(s[1]) for s in shown if s)
+    if rows > MAX_LINES:
+        raise KitError(f"{where}: {target} shows {rows} rows of code, more than a slide holds at a size the back "
+                       f"row reads ({MAX_LINES}): choose a shorter range with from: and to:")
+    too_wide = [(e[0], len(row)) for e in shown if e for row in (unescape(re.sub(r"<[^>]+>", "", r)) for r in e[1])
+                if len(row) > width]
+    if too_wide:
+        n, chars = too_wide[0]
+        raise KitError(f"{where}: {path_text}:{n} is {chars} characters with nowhere Python lets it fold, wider than a "
+                       f"slide shows ({width}): shorten that line of the reference or choose a range without it")
     return Listing(path=path_text, function=qualname, lines=tuple(shown), texts=texts)
