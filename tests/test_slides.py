@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from markupsafe import escape
-from PIL import Image
+from PIL import Image, PngImagePlugin
 
 import cs451.slides
 from cs451 import KIT_ROOT
@@ -88,7 +88,9 @@ class StubFigures(types.ModuleType):
             stripes = ((x // 40 + y // 40) % 2)[..., None]               # a checkerboard in the key's colours
             ramp = np.stack([x * 255 / width, y * 255 / height, np.full(x.shape, 128.0)], axis=-1)
             image = np.where(stripes == 1, palette[1], palette[0]) * 0.7 + ramp * 0.3
-            Image.fromarray(image.astype(np.uint8)).save(path)
+            info = PngImagePlugin.PngInfo()
+            info.add_text("cs451:text_px", "40")           # as the real figures say it: text 40 PNG pixels high
+            Image.fromarray(image.astype(np.uint8)).save(path, pnginfo=info)
         return path
 
 
@@ -534,8 +536,12 @@ def test18_the_decks_with_the_real_figures_open_offline_and_show_them(tmp_path, 
                           cwd=KIT_ROOT, capture_output=True, text=True, timeout=1800)
     assert done.returncode == 0, done.stderr[-3000:]
     assert sorted(p.stem for p in out.glob("*.html")) == sorted(DECKS)
+    from cs451.slides.readability import measure_deck
     for name in DECKS:
         check_deck(browser, name, out / f"{name}.html")
+        # the back-row floors with the real figures: their text and their pixels as the decks show them
+        problems = [p for m in measure_deck(browser, out / f"{name}.html") for p in m.problems]
+        assert not problems, "\n".join(problems[:20])
     keep = Path(os.environ["CS451_SLIDE_SCREENSHOTS"]) if os.environ.get("CS451_SLIDE_SCREENSHOTS") else None
     other = next(cache.glob("bench-radiosity-*.png"))
     for deck, kind, what in SCREENSHOTS:
