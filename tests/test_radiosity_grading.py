@@ -68,18 +68,17 @@ def test04_one_broken_function_loses_its_task_and_what_calls_it(make_submission,
 
 
 def test05_demo_writes_frames_and_an_animation(tmp_path):
+    """The frames after 0, 1, 2 and 4 shots; what the keys do is tests/test_demo_radiosity.py's."""
     from cs451.stages.radiosity.demo import demo
-    paths = demo(REF, tmp_path, window=False, frames=4, scene_name="furnace", size=(48, 48))
-    assert paths[0].name == "radiosity.gif" and len(paths) == 1 + 5          # 4 frames after shots, and the answer
+    paths = demo(REF, tmp_path, window=False, frames=4, scene="furnace", size=(48, 48))
+    assert paths[0].name == "radiosity.gif" and len(paths) == 1 + 4
     with Image.open(paths[0]) as gif:
-        assert gif.n_frames == 5
-    first, last = (np.asarray(Image.open(p), dtype=float) for p in (paths[1], paths[-1]))
-    assert first.shape[0] > 48 and first.shape[1:] == (96, 3)       # the panels, and a caption strip under them
-    assert first[48:].std() > 10                                      # the caption says what the frame shows
-    first, last = first[:48], last[:48]
-    # before any shot the furnace shows B = E (left) and the exact answer E/(1 - ρ) with the ambient term (right)
-    assert first[:, 48:].mean() > first[:, :48].mean() + 20
-    assert np.allclose(last[:, :48], last[:, 48:], atol=2)
+        assert gif.n_frames == 4
+    first, second = (np.asarray(Image.open(p), dtype=float) for p in paths[1:3])
+    bar = max(10, 48 // 24)
+    assert first.shape == second.shape and first.shape[0] > 48 + bar and first.shape[1:] == (48, 3)
+    assert first[48 + bar:].std() > 10                           # the caption says what the frame shows
+    assert not np.array_equal(first, second)                      # a shot later
 
 
 @pytest.mark.skipif(shutil.which("xvfb-run") is None, reason="needs Xvfb (xvfb-run) for a window without a display")

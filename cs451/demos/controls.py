@@ -8,6 +8,8 @@ from ..stages import get_stage, stage_names
 
 #: Keys that end every demo the kit's loop runs (stage 1 leaves quitting to the student's S8).
 QUIT_KEYS = ("q", "escape")
+#: Keys the window itself answers in every demo (before the demo, or the student's S8, sees any key).
+WINDOW_KEYS = (("f", "full screen on / off"), ("h ?", "this help"))
 
 
 def key_line(stage: str) -> str:
@@ -19,6 +21,17 @@ def key_line(stage: str) -> str:
     return " · ".join(f"{key} {what}" for key, what in keys)
 
 
+def help_keys(stage: str) -> list[tuple[str, str]]:
+    """What the help overlay lists: the stage's own keys, then the window's (full screen, help), and q if not there."""
+    try:
+        keys = list(get_stage(stage).demo_keys)
+    except KitError:
+        keys = []
+    quits = [k for k in keys if k[0].split()[0] == "q"]
+    rest = [k for k in keys if k not in quits]
+    return rest + list(WINDOW_KEYS) + (quits or [("q Esc", "quits")])
+
+
 def help_text(stages: list[str] | None = None) -> str:
     """The keys of every demo (or of ``stages``' only: a student's copy has one), for ``cs451 demo --help``."""
     lines = ["keys in the window:"]
@@ -26,4 +39,5 @@ def help_text(stages: list[str] | None = None) -> str:
         if stages is not None and stage not in stages:
             continue
         lines.append(f"  {stage:<10} " + ", ".join(f"{key}: {what}" for key, what in get_stage(stage).demo_keys))
+    lines.append(f"  {'every demo':<10} " + ", ".join(f"{key}: {what}" for key, what in WINDOW_KEYS))
     return "\n".join(lines)

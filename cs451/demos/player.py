@@ -3,26 +3,32 @@
 :class:`Screen` is the headless/windowed switch: with a window, each frame is shown as it
 comes (q or Esc, closing the window, or ``--frames`` ends the demo by raising
 :class:`Closed`), and keys and clicks come back as events; without one, the frames are kept
-and written at the end as PNGs and an animated GIF (:mod:`.frames`). Stage 4's demo draws
-into the screen itself; stages 2 and 3 make their frames as images and run :func:`play`.
+and written at the end as PNGs and an animated GIF (:mod:`.frames`). Either way a frame is a
+picture with a caption (what it shows) and, until the first key, the help panel (every key):
+the window draws them over the picture at its own resolution, the frames get them drawn in
+(:mod:`.overlay`). Stage 1's demo draws into its window itself; the others make their
+pictures as images and run :func:`play`.
 
-:func:`play` runs an :class:`Interactive` demo. In a window it renders in small pieces
-between frames (``step`` does a few tens of milliseconds of work), so the window answers
-keys while the picture refines, and sleeps when there is nothing to do. Without a display
-it runs the demo's own *script* (groups of keys and clicks, a frame after each group and at
-the milestones of the first, as the picture refines): the headless frames are what a
-lecturer would see pressing those keys. ``screenshot`` runs the same script in the window
-and grabs it at the end, so a test can compare the window with the headless frame.
+:func:`play` runs an :class:`Interactive` demo. The window opens first and says what the demo
+is preparing (loading the ray tracer's compiled kernels, building a hierarchy), so it is up in
+a second or two whatever comes next. Then it renders in small pieces between frames (``step``
+does a few tens of milliseconds of work), so the window answers keys while the picture
+refines, and sleeps when there is nothing to do. Without a display it runs the demo's own
+*script* (groups of keys and clicks, a frame after each group and at the milestones of the
+first, as the picture refines): the headless frames are what a lecturer would see pressing
+those keys. ``screenshot`` runs the same script in the window and grabs it at the end, so a
+test can compare the window with the headless frame.
 """
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Callable, Protocol
+from typing import Any, Callable, Iterator, Protocol
 
 import numpy as np
 
-from .controls import QUIT_KEYS, key_line
-from .frames import captioned, write_frames
+from .controls import QUIT_KEYS, help_keys, key_line
+from .frames import write_frames
+from .overlay import HELP_SECONDS, compose, framed_size
 
 #: Seconds of work between two frames of a live window (responsive, yet mostly rendering).
 STEP_SECONDS = 0.04
@@ -40,20 +46,30 @@ class Closed(Exception):
 class Screen:
     """A window (``window=True``) or a list of frames written to ``output`` as ``name.gif`` and ``name-NN.png``.
 
-    ``size`` is the first frame's (width, height): the window opens at it. The title lists the stage's keys
-    (:mod:`.controls`). ``frames``: a window closes after showing that many frames.
+    ``size`` is the picture's (width, height): the window opens at it with the caption band under it (a band of
+    ``caption_lines`` lines), or ``fullscreen``. The title lists the stage's keys and the help panel all the keys
+    (:mod:`.controls`). ``frames``: a window closes after showing that many frames. ``scripted``: the help panel
+    stays up until the first scripted key (:meth:`note`), not for a time, so a scripted window shows what the
+    headless frames show. ``smooth``: the picture is interpolated when scaled (a rendered one, not ray-traced pixels).
     """
 
     def __init__(self, name: str, title: str, size: tuple[int, int], *, window: bool, frames: int | None = None,
-                 output: Path = Path("demo"), stage: str | None = None):
+                 output: Path = Path("demo"), stage: str | None = None, caption_lines: int = 1,
+                 fullscreen: bool = False, scripted: bool = False, smooth: bool = False):
         self.name, self.output, self.frames = name, Path(output), frames
-        self.kept: list[np.ndarray] = []
+        self.keys = help_keys(stage or name)
+        self.lines, self.smooth = caption_lines, smooth
+        self.help_shown = True
+        self.kept: list[tuple[np.ndarray, str, bool]] = []
         self._events: list[Event] = []
         self.win: Any = None
         if window:
             from .window import Window
             keys = key_line(stage or name)
-            self.win = Window(size[0], size[1], f"{title} — {keys}" if keys else title)
+            width, height = framed_size(size, caption_lines)
+            self.win = Window(width, height, f"{title} — {keys}" if keys else title, keys=self.keys,
+                              caption_lines=caption_lines, fullscreen=fullscreen,
+                              help_seconds=None if scripted else HELP_SECONDS)
 
     @property
     def ctx(self) -> Any:
@@ -61,17 +77,27 @@ class Screen:
         return self.win.ctx if self.win is not None else None
 
     def show(self, image: np.ndarray | None = None, caption: str | None = None,
-             draw: Callable[[], Any] | None = None) -> None:
-        """Show (or keep) a frame: a uint8 image with an optional caption, or, in a window, ``draw()`` drawing it."""
-        frame = captioned(image, caption) if image is not None and caption is not None else image
+             draw: Callable[[], Any] | None = None, preparing: bool = False) -> None:
+        """Show (or keep) a frame: a uint8 picture and its caption, or, in a window, ``draw()`` drawing it.
+        ``preparing``: a frame saying what the demo is still preparing (shown, never kept, not counted)."""
         if self.win is None:
-            if frame is not None:
-                self.kept.append(frame)
+            if image is not None and not preparing:
+                self.kept.append((image, caption or "", self.help_shown))
             return
         self._poll()
-        self.win.show(draw if draw is not None else (lambda: self.win.blit(frame)))
+        self.win.caption = caption or ""
+        self.win.show(draw if draw is not None else (lambda: self.win.blit(image, self.smooth)), count=not preparing)
         if self.win.done(self.frames):
             raise Closed
+
+    def note(self, event: Event) -> None:
+        """A scripted key or click: the help panel toggles (h, ?) or hides, as for the user's own."""
+        if event[0] == "key" and event[1] in ("h", "?"):
+            self.help_shown = not self.help_shown
+        else:
+            self.help_shown = False
+        if self.win is not None:
+            self.win.help_shown, self.win._help_until = self.help_shown, None
 
     def events(self) -> list[Event]:
         """Keys and clicks since the last call (none without a window); raises Closed when the user quit."""
@@ -89,11 +115,14 @@ class Screen:
         return self.win.screenshot(path)
 
     def close(self) -> list[Path]:
-        """Close the window (nothing written), or write the kept frames: the GIF first, then the PNGs."""
+        """Close the window (nothing written), or write the kept frames, each with its caption band and (until the
+        first key) the help panel drawn in: the GIF first, then the PNGs."""
         if self.win is not None:
             self.win.close()
             return []
-        return write_frames(self.output, self.name, self.kept)
+        lines = max([self.lines] + [len(c.split("\n")) for _, c, _ in self.kept])
+        frames = [compose(p, c, lines, self.keys, shown) for p, c, shown in self.kept]
+        return write_frames(self.output, self.name, frames)
 
     def _poll(self) -> None:
         for key in self.win.keys():
@@ -110,18 +139,21 @@ class Screen:
 
 
 class Interactive(Protocol):
-    """A demo that makes its frames as images: what :func:`play` asks of it."""
-    name: str      # the stage, and the frames' file names
-    title: str     # the window title, before the keys
+    """A demo that makes its pictures as images: what :func:`play` asks of it."""
+    name: str           # the stage, and the frames' file names
+    title: str          # the window title, before the keys
+    caption_lines: int  # lines its caption has (the band's height)
+    smooth: bool        # its picture is rendered (interpolate when scaled), not ray-traced pixels
 
     def frame_size(self) -> tuple[int, int]:
-        """(width, height) of its frames, caption included: the window opens at this size."""
+        """(width, height) of its pictures, known before any work: the window opens at this size."""
 
-    def start(self, ctx: Any) -> None:
-        """Make GL objects, in the window's context ``ctx`` (None without a window: make a standalone one)."""
+    def prepare(self, ctx: Any) -> Iterator[str]:
+        """The slow set-up, in steps: yields what it does next before each (the window says so), in the window's
+        GL context ``ctx`` (None without a window: make a standalone one)."""
 
     def handle(self, event: Event) -> None:
-        """A key or a click (in frame pixels)."""
+        """A key or a click (in picture pixels)."""
 
     def busy(self) -> bool:
         """Whether it has work left (a picture refining, a patch to compute)."""
@@ -130,24 +162,32 @@ class Interactive(Protocol):
         """About ``seconds`` of work; True when a frame worth keeping is ready (a refinement level done)."""
 
     def frame(self) -> np.ndarray:
-        """The current frame, uint8 RGB (h, w, 3), caption included."""
+        """The current picture, uint8 RGB (h, w, 3), without its caption."""
+
+    def caption(self) -> str:
+        """What the picture shows, a line per slot of the band."""
 
     def script(self) -> list[list[Event]]:
         """What the headless run does: groups of events, a frame after each."""
 
 
 def play(demo: Interactive, *, window: bool, frames: int | None = None, output: Path = Path("demo"),
-         screenshot: Path | None = None) -> list[Path]:
+         screenshot: Path | None = None, fullscreen: bool = False) -> list[Path]:
     """Run ``demo`` in a window (the user's keys, until q) or headless (its script); returns the files written.
 
     ``frames``: headless, or with ``screenshot``, keep the script's first that many frames; in a live window,
     close after that many. ``screenshot``: run the script in the window and save what the display shows.
+    ``fullscreen``: open the window full screen.
     """
     scripted = not window or screenshot is not None
     screen = Screen(demo.name, demo.title, demo.frame_size(), window=window, frames=None if scripted else frames,
-                    output=output)
+                    output=output, caption_lines=getattr(demo, "caption_lines", 1), fullscreen=fullscreen,
+                    scripted=scripted, smooth=getattr(demo, "smooth", False))
     try:
-        demo.start(screen.ctx)
+        blank = np.full((*demo.frame_size()[::-1], 3), 0, np.uint8)
+        for what in demo.prepare(screen.ctx):
+            if screen.win is not None:
+                screen.show(blank, f"{demo.title}: {what} …", preparing=True)
         if scripted:
             _scripted(demo, screen, frames)
             if screenshot is not None:
@@ -166,12 +206,13 @@ def _scripted(demo: Interactive, screen: Screen, frames: int | None) -> None:
 
     def keep() -> bool:
         nonlocal kept
-        screen.show(demo.frame())
+        screen.show(demo.frame(), demo.caption())
         kept += 1
         return frames is not None and kept >= frames
 
     for k, group in enumerate(demo.script()):
         for event in group:
+            screen.note(event)
             demo.handle(event)
         while demo.busy():
             milestone = demo.step(STEP_SECONDS)
@@ -180,13 +221,13 @@ def _scripted(demo: Interactive, screen: Screen, frames: int | None) -> None:
                 if keep():
                     return
             elif screen.win is not None:
-                screen.show(demo.frame())
+                screen.show(demo.frame(), demo.caption(), preparing=True)
         if keep():
             return
 
 
 def _live(demo: Interactive, screen: Screen) -> None:
-    frame = None
+    frame = caption = None
     while True:
         changed = frame is None
         for event in screen.events():
@@ -196,7 +237,29 @@ def _live(demo: Interactive, screen: Screen) -> None:
             demo.step(STEP_SECONDS)
             changed = True
         if changed:
-            frame = demo.frame()
+            frame, caption = demo.frame(), demo.caption()
         else:
             screen.wait()
-        screen.show(frame)
+        screen.show(frame, caption)
+
+
+class Prepared:
+    """What a demo with a slow set-up shares: :meth:`prepare` runs its ``_preparing`` steps once, however far an
+    earlier call got, and :meth:`ready` finishes them (a test, or a key pressed early, needs the demo ready)."""
+    _steps: Iterator[str] | None = None
+    _ctx: Any = None
+
+    def prepare(self, ctx: Any) -> Iterator[str]:
+        """The set-up's steps, each yielding what it does next; in ``ctx`` (None: a standalone context)."""
+        if self._steps is None:
+            self._ctx = ctx
+            self._steps = self._preparing()
+        yield from self._steps
+
+    def ready(self) -> None:
+        """Finish the set-up now."""
+        for _ in self.prepare(self._ctx):
+            pass
+
+    def _preparing(self) -> Iterator[str]:
+        yield from ()

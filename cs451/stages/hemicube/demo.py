@@ -21,13 +21,13 @@ from __future__ import annotations
 import time
 from pathlib import Path
 from types import ModuleType
-from typing import Any
+from typing import Any, Iterator
 
 import numpy as np
 
-from ...demos.frames import captioned
+from ...demos import overlay
+from ...demos.player import Event, Prepared, play
 from ...errors import KitError
-from ...demos.player import Event, play
 from ...formfactors import HemicubeFormFactors, palette, unfold
 from ...imageio import to_uint8
 from ...patches import patch_triangles, scene_polygons
@@ -122,14 +122,15 @@ class _Shown:
     """What the frame shows for one patch: the hemicube (buffers, views, sums) and the painted row."""
 
     def __init__(self, patch: int, row: np.ndarray, hemicube_row: np.ndarray, top: np.ndarray, sides: np.ndarray,
-                 views: np.ndarray, tables: tuple[np.ndarray, np.ndarray]):
-        self.patch, self.row, self.hemicube_row = patch, row, hemicube_row
+                 views: np.ndarray, tables: tuple[np.ndarray, np.ndarray], final: bool = True):
+        self.patch, self.row, self.hemicube_row, self.final = patch, row, hemicube_row, final
         self.top, self.sides, self.views, self.tables = top, sides, views, tables
 
 
-class HemicubeDemo:
+class HemicubeDemo(Prepared):
     """The demo's state: the patches, the engines by setting, the patch shown and how it looks."""
     name = "hemicube"
+    caption_lines = 3
 
     def __init__(self, module: ModuleType, scene: str | Path = "cornell-box", size: tuple[int, int] | None = None):
         self.scene = load_scene(scene)
@@ -159,22 +160,34 @@ class HemicubeDemo:
 
     # --- the player's interface ---------------------------------------------------------------
     def frame_size(self) -> tuple[int, int]:
-        lines = captioned(np.zeros((self.size[1], self.size[0], 3), np.uint8), "\n".join(["."] * 3))
-        return lines.shape[1], lines.shape[0]
+        return self.size
+
+    def _preparing(self) -> Iterator[str]:
+        from ...gl import create_context
+        yield "the scene's patches, seen from its camera"
+        self.ctx = self._ctx or create_context()
+        self.painter = ScenePainter(self.ctx, self.scene, self.quads, self.calls, (self.width, self.height))
 
     def start(self, ctx: Any) -> None:
-        from ...gl import create_context
-        self.ctx = ctx or create_context()
-        self.painter = ScenePainter(self.ctx, self.scene, self.quads, self.calls, (self.width, self.height))
+        """Prepare in ``ctx`` (None: a standalone context) at once."""
+        for _ in self.prepare(ctx):
+            pass
 
     def busy(self) -> bool:
         due = self.sweeping and time.perf_counter() - self._swept >= SWEEP_SECONDS
-        return self.shown is None or self.shown.patch != self.patch or due
+        return self.shown is None or self.shown.patch != self.patch or not self.shown.final or due
 
     def step(self, seconds: float) -> bool:
-        if self.sweeping and self.shown is not None and self.shown.patch == self.patch:
+        """The patch's hemicube first (a frame at once), then its row with the proximity fix (seconds, for a patch
+        touching others)."""
+        self.ready()
+        s = self.shown
+        if s is not None and s.patch == self.patch and not s.final:
+            s.row, s.final, self._frame = self.engine(self.proximity).row(s.patch), True, None
+            return False
+        if self.sweeping and s is not None and s.patch == self.patch:
             self.patch = (self.patch + 1) % self.n
-        self.show(self.patch)
+        self.show(self.patch, fixed=False)
         self._swept = time.perf_counter()
         return False
 
@@ -204,9 +217,16 @@ class HemicubeDemo:
         return [[]] + [[("key", "right")] for _ in range(self.n - 1)]
 
     def frame(self) -> np.ndarray:
+        self.ready()
+        if self.shown is None:
+            self.show(self.patch)
         if self._frame is None:
             self._frame = self._compose()
         return self._frame
+
+    def caption(self) -> str:
+        self.frame()
+        return "\n".join(self._caption())
 
     # --- the hemicube -----------------------------------------------------------------------------
     def engine(self, proximity: bool) -> HemicubeFormFactors:
@@ -217,14 +237,17 @@ class HemicubeDemo:
                                                     proximity="contour" if proximity else "none", ctx=self.ctx)
         return self.engines[key]
 
-    def show(self, patch: int) -> None:
-        """Compute what the frame shows for ``patch``: its hemicube's buffers and H5 row, and the engine's row."""
+    def show(self, patch: int, fixed: bool = True) -> None:
+        """Compute what the frame shows for ``patch``: its hemicube's buffers and H5 row, and the engine's row (not
+        ``fixed``: the hemicube's row stands in for it until the next step, when the proximity fix takes a while)."""
         bare = self.engine(False)
         tops, sides = bare.item_buffers([patch])
         tables = bare.tables
         hemicube_row = self.calls.row(tops[0].copy(), sides[0].copy(), tables[0], tables[1], self.n)
-        row = self.engine(self.proximity).row(patch)
-        self.shown = _Shown(patch, row, hemicube_row, tops[0], sides[0], bare.views_for(patch), tables)
+        engine = self.engine(self.proximity)
+        final = fixed or not self.proximity or engine.has_row(patch)
+        row = engine.row(patch) if final else hemicube_row
+        self.shown = _Shown(patch, row, hemicube_row, tops[0], sides[0], bare.views_for(patch), tables, final)
         self._frame = None
 
     def painted_row(self) -> np.ndarray:
@@ -283,27 +306,31 @@ class HemicubeDemo:
         for name, _, w, h in faces:
             labels.append((name, (x, side + vh - h, w, h)))
             x += w + 4
+        font = overlay.font(max(11, side // 20))          # scaled with the picture: ~30 px on a 1080p screen
         for text, (left, top, _, _) in labels:
-            draw.rectangle((left, top, left + draw.textlength(text) + 6, top + 14), fill=(0, 0, 0))
-            draw.text((left + 3, top + 1), text, fill=(240, 240, 240))
-        return captioned(np.asarray(picture), "\n".join(self._caption()))
+            right, bottom = left + draw.textlength(text, font=font) + 6, top + getattr(font, "size", 10) + 4
+            draw.rectangle((left, top, right, bottom), fill=(0, 0, 0))
+            draw.text((left + 3, top + 2), text, fill=(240, 240, 240), font=font)
+        return np.asarray(picture)
 
     def _caption(self) -> list[str]:
         s = self.shown
         assert s is not None
         light = [j for j, m in enumerate(self.materials) if m == "light"]
-        fix = "with the proximity fix (H6)" if self.proximity else "without the proximity fix"
+        fix = ("with the proximity fix (H6)" if s.final else "(the proximity fix (H6): computing …)") \
+            if self.proximity else "without the proximity fix"
         biggest = int(np.argmax(s.row))
-        return [f"patch {s.patch} of {self.n} ({self.materials[s.patch]}): row sum {s.row.sum():.4f} {fix}; "
-                f"this hemicube alone (H5): {s.hemicube_row.sum():.4f}",
-                f"F to the light {s.row[light].sum():.4f}, largest F {s.row[biggest]:.4f} (to patch {biggest}), "
-                f"sees {int((s.hemicube_row > 0).sum())} patches",
+        return [f"hemicube · {self.scene.name} · patch {s.patch} of {self.n} ({self.materials[s.patch]}): "
+                f"row sum {s.row.sum():.4f} {fix}",
+                f"this hemicube alone (H5): {s.hemicube_row.sum():.4f} · F to the light {s.row[light].sum():.4f} · "
+                f"largest F {s.row[biggest]:.4f} (to patch {biggest}) · sees {int((s.hemicube_row > 0).sum())} patches",
                 f"resolution {self.resolution}, rotation {'on' if self.rotate else 'off'}"
                 + (", sweeping" if self.sweeping else "")]
 
 
 def demo(module: ModuleType, output: Path, window: bool, frames: int | None, scene: str | Path = "cornell-box",
-         size: tuple[int, int] | None = None, screenshot: Path | None = None) -> list[Path]:
+         size: tuple[int, int] | None = None, screenshot: Path | None = None, fullscreen: bool = False) -> list[Path]:
     """In a window: a patch's hemicube and its row, patches picked by keys or clicks. Headless: a sweep over every
     patch, a frame each, as PNGs and ``hemicube.gif``."""
-    return play(HemicubeDemo(module, scene, size), window=window, frames=frames, output=output, screenshot=screenshot)
+    return play(HemicubeDemo(module, scene, size), window=window, frames=frames, output=output, screenshot=screenshot,
+                fullscreen=fullscreen)

@@ -12,12 +12,11 @@ import math
 import time
 from pathlib import Path
 from types import ModuleType
-from typing import Any
+from typing import Iterator
 
 import numpy as np
 
-from ...demos.frames import captioned
-from ...demos.player import Event, play
+from ...demos.player import Event, Prepared, play
 from ...imageio import to_uint8
 from ...scene import load_scene
 from .. import pathtrace as P
@@ -28,9 +27,10 @@ MIN_FRAME_WIDTH = 512
 SCRIPT_SPP = 16
 
 
-class PathDemo:
+class PathDemo(Prepared):
     """The running mean of the passes so far, for the whole picture or for the direct light alone."""
     name = "pathtrace"
+    caption_lines = 1
 
     def __init__(self, module: ModuleType, scene: str | Path = "cornell-box", size: tuple[int, int] | None = None):
         self.scene = load_scene(scene)
@@ -44,6 +44,10 @@ class PathDemo:
         self.direct_only = False
         self.paused = False
         self.target = self.opts.spp * 64           # a live window refines far past the render's default
+        self._frame: np.ndarray | None = None
+
+    def _preparing(self) -> Iterator[str]:
+        yield "the scene's paths"
         self._restart()
 
     def _restart(self) -> None:
@@ -56,18 +60,17 @@ class PathDemo:
 
     # --- the player's interface ---------------------------------------------------------------
     def frame_size(self) -> tuple[int, int]:
-        return tuple(self.frame().shape[1::-1])   # type: ignore[return-value]
-
-    def start(self, ctx: Any) -> None:
-        """Nothing to make: the tracer runs on the CPU and frames are images."""
+        return self.width * self.zoom, self.height * self.zoom
 
     def busy(self) -> bool:
+        self.ready()
         return not self.paused and self.passes < self.target
 
     def handle(self, event: Event) -> None:
+        self.ready()
         if event[0] != "key":
             return
-        if event[1] == " ":
+        if event[1] in (" ", "space"):
             self.paused = not self.paused
         elif event[1] == "r":
             self._restart()
@@ -78,6 +81,7 @@ class PathDemo:
 
     def step(self, seconds: float) -> bool:
         """One pass (a path per pixel); True when the sample count reaches a power of two (a frame worth keeping)."""
+        self.ready()
         started = time.perf_counter()
         o, d = P.pixel_rays(self.module, self.scene.camera, self.width, self.height,
                              self.rng.random((self.width * self.height, 2)))
@@ -92,11 +96,15 @@ class PathDemo:
         return (self.total / max(self.passes, 1)).reshape(self.height, self.width, 3)
 
     def frame(self) -> np.ndarray:
+        self.ready()
         if self._frame is None:
             image = to_uint8(self.image(), self.scene.image.exposure, self.scene.image.srgb)
-            image = np.repeat(np.repeat(image, self.zoom, axis=0), self.zoom, axis=1)
-            self._frame = captioned(image, "\n".join(self._caption()))
+            self._frame = np.repeat(np.repeat(image, self.zoom, axis=0), self.zoom, axis=1)
         return self._frame
+
+    def caption(self) -> str:
+        self.ready()
+        return "\n".join(self._caption())
 
     def script(self) -> list[list[Event]]:
         """Converge to SCRIPT_SPP samples per pixel; then the direct light alone, as far."""
@@ -108,13 +116,13 @@ class PathDemo:
         length = (c["bounce"] / c["camera"]) if c["camera"] else 0.0
         what = "direct light only (d)" if self.direct_only else "all bounces"
         rate = f", {self.passes / self.seconds:.1f} passes/s" if self.seconds > 0 else ""
-        return [f"{self.passes} samples per pixel · {what} · {length:.2f} bounces a path{rate}"
-                + (" · paused" if self.paused else ""),
-                "keys: " + " · ".join(f"{key} {what}" for key, what in P.DEMO_KEYS)]
+        return [f"pathtrace · {self.scene.name}: {self.passes} samples per pixel · {what} · {length:.2f} bounces a path{rate}"
+                + (" · paused" if self.paused else "")]
 
 
 def demo(module: ModuleType, output: Path, window: bool, frames: int | None, scene: str | Path = "cornell-box",
-         size: tuple[int, int] | None = None, screenshot: Path | None = None) -> list[Path]:
+         size: tuple[int, int] | None = None, screenshot: Path | None = None, fullscreen: bool = False) -> list[Path]:
     """In a window: the picture converging, until q. Headless: the frames at 1, 2, 4, … samples per pixel, then the
     direct light alone, as PNGs and ``pathtrace.gif``."""
-    return play(PathDemo(module, scene, size), window=window, frames=frames, output=output, screenshot=screenshot)
+    return play(PathDemo(module, scene, size), window=window, frames=frames, output=output, screenshot=screenshot,
+                fullscreen=fullscreen)

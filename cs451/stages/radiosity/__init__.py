@@ -428,7 +428,8 @@ def handout_diagrams() -> dict:
 
 
 #: the demo's keys
-DEMO_KEYS = (("q", "quits"),)
+DEMO_KEYS = (("space", "pauses / resumes"), ("n →", "one shot"), ("r", "starts again"), ("g", "flat patches / Gouraud"),
+             ("a", "ambient preview on / off"), ("q", "quits"))
 
 
 STAGE = Stage(

@@ -37,13 +37,12 @@ from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
-from typing import Any, Callable
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
 from ... import tracescene
-from ...demos.frames import captioned
-from ...demos.player import Event, play
+from ...demos.player import Event, Prepared, play
 from ...imageio import to_uint8
 from ...scene import Sphere, load_scene
 from .. import whitted as W
@@ -138,9 +137,14 @@ def _recorded(own: Callable, log: list, columns: tuple[int, ...]) -> Callable:
     return recording
 
 
-class WhittedDemo:
-    """The demo's state: the camera rays, one refining picture per setting, and the ray tree shown."""
+class WhittedDemo(Prepared):
+    """The demo's state: the camera rays, one refining picture per setting, and the ray tree shown.
+
+    Made at once (the window opens at its size); the camera rays (W1, which loads the reference's compiled kernels)
+    and the hierarchy (W4) are its preparation, which the player runs with the window up.
+    """
     name = "whitted"
+    caption_lines = 6
 
     def __init__(self, module: ModuleType, scene: str | Path = "whitted", size: tuple[int, int] | None = None):
         self.scene = load_scene(scene)
@@ -151,15 +155,7 @@ class WhittedDemo:
         self.title = f"cs451 whitted: {self.scene.name}"
         self.k = math.isqrt(self.opts.spp)
         self.zoom = max(1, math.ceil(MIN_FRAME_WIDTH / self.width))
-        self.origins, self.directions = W.STAGE.call(module, "W1", self.scene.camera, self.width * self.k,
-                                                     self.height * self.k)
-        self.camera = Pinhole(self.origins, self.directions, self.width, self.height, self.k)
         self.tracer = module
-        self.base = W.prepare(self.scene, self.tracer)
-        self.order, self.ends, self.blocks = progressive_order(self.width, self.height)
-        wk = self.width * self.k
-        self.first_ray = (self.order // self.width) * self.k * wk + (self.order % self.width) * self.k
-        self.sub_rays = (np.arange(self.k)[:, None] * wk + np.arange(self.k)[None, :]).ravel()
         self.reach = float(np.linalg.norm(np.subtract(self.scene.camera.center, self.scene.camera.eye))) + 1.0
         self.piece = max(1, 256 // self.k ** 2)
         self._last_piece: tuple[int, float] | None = None
@@ -167,19 +163,30 @@ class WhittedDemo:
         self.renders: dict[Settings, _Render] = {}
         self.tree: RayTree | None = None
         self._frame: np.ndarray | None = None
+
+    def _preparing(self) -> Iterator[str]:
+        yield "the camera rays (W1)"
+        self.origins, self.directions = W.STAGE.call(self.tracer, "W1", self.scene.camera, self.width * self.k,
+                                                     self.height * self.k)
+        self.camera = Pinhole(self.origins, self.directions, self.width, self.height, self.k)
+        yield "the scene's hierarchy (W4)"
+        self.base = W.prepare(self.scene, self.tracer)
+        self.order, self.ends, self.blocks = progressive_order(self.width, self.height)
+        wk = self.width * self.k
+        self.first_ray = (self.order // self.width) * self.k * wk + (self.order % self.width) * self.k
+        self.sub_rays = (np.arange(self.k)[:, None] * wk + np.arange(self.k)[None, :]).ravel()
         self._use(self.settings)
 
     # --- the player's interface ---------------------------------------------------------------
     def frame_size(self) -> tuple[int, int]:
-        return tuple(self.frame().shape[1::-1])   # type: ignore[return-value]
-
-    def start(self, ctx: Any) -> None:
-        """Nothing to make: the tracer runs on the CPU and frames are images."""
+        return self.width * self.zoom, self.height * self.zoom
 
     def busy(self) -> bool:
+        self.ready()
         return self.render.pos < len(self.order)
 
     def handle(self, event: Event) -> None:
+        self.ready()
         if event[0] == "click":
             x, y = int(event[1]) // self.zoom, int(event[2]) // self.zoom
             if 0 <= x < self.width and 0 <= y < self.height:
@@ -198,6 +205,7 @@ class WhittedDemo:
                 self.tree = self.ray_tree(*self.tree.pixel)
 
     def step(self, seconds: float) -> bool:
+        self.ready()
         r, stop = self.render, time.perf_counter() + seconds
         while r.pos < len(self.order):
             end = self.ends[r.level]
@@ -217,17 +225,23 @@ class WhittedDemo:
         return False
 
     def frame(self) -> np.ndarray:
+        self.ready()
         if self._frame is None:
             r, z = self.render, self.zoom
             image = to_uint8(r.image, self.scene.image.exposure, self.scene.image.srgb)
             image = np.repeat(np.repeat(image, z, axis=0), z, axis=1)
             if self.tree is not None:
                 image = self._draw_tree(image, self.tree)
-            self._frame = captioned(image, "\n".join(self._caption()))
+            self._frame = image
         return self._frame
+
+    def caption(self) -> str:
+        self.ready()
+        return "\n".join(self._caption())
 
     def script(self) -> list[list[Event]]:
         """Refine; click the default pixel; shadows, reflection, refraction and the cut-off off in turn; all back on."""
+        self.ready()
         x, y = self.default_pixel()
         click = ("click", x * self.zoom + self.zoom // 2, y * self.zoom + self.zoom // 2)
         k = [("key", c) for c in "ssrrttcc"]
@@ -277,6 +291,7 @@ class WhittedDemo:
     # --- one pixel's ray tree -------------------------------------------------------------------
     def ray_tree(self, x: int, y: int) -> RayTree:
         """Trace pixel (x, y)'s camera ray (its middle sample) with the submission's W11, recording its W5 and W7."""
+        self.ready()
         ray = (y * self.k + self.k // 2) * self.width * self.k + x * self.k + self.k // 2
         hits: list[list[np.ndarray]] = []
         shadows: list[list[np.ndarray]] = []
@@ -325,6 +340,7 @@ class WhittedDemo:
     def default_pixel(self) -> tuple[int, int]:
         """A pixel with a tree worth showing: beside the middle of the first glass sphere (else a mirror, else the
         image's middle), off its centre so that the refracted rays bend."""
+        self.ready()
         for want in ("mat_transmittance", "mat_reflectance"):
             for obj in self.scene.objects:
                 if isinstance(obj, Sphere):
@@ -353,11 +369,12 @@ class WhittedDemo:
         rays = (f"rays: {c['camera']:,} camera, {c['reflection']:,} reflection, {c['transmission']:,} transmission, "
                 f"{c['shadow']:,} shadow")
         tree = self.tree.summary() if self.tree is not None else ["click a pixel: its ray tree", ""]
-        return [f"{progress} — {switches}", rays, *tree, LEGEND]
+        return [f"whitted · {self.scene.name} · {progress}", switches, rays, *tree, LEGEND]
 
 
 def demo(module: ModuleType, output: Path, window: bool, frames: int | None, scene: str | Path = "whitted",
-         size: tuple[int, int] | None = None, screenshot: Path | None = None) -> list[Path]:
+         size: tuple[int, int] | None = None, screenshot: Path | None = None, fullscreen: bool = False) -> list[Path]:
     """In a window: the picture refining, the switches and a clicked pixel's ray tree. Headless: the script's frames
     (the refinement, a ray tree, each switch off in turn, all back on) as PNGs and ``whitted.gif``."""
-    return play(WhittedDemo(module, scene, size), window=window, frames=frames, output=output, screenshot=screenshot)
+    return play(WhittedDemo(module, scene, size), window=window, frames=frames, output=output, screenshot=screenshot,
+                fullscreen=fullscreen)
