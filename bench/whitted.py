@@ -352,3 +352,82 @@ def main(output: Path, quick: bool = False) -> dict:
     _plot(rows, speed, output / "whitted.png")
     print(f"wrote {output / 'whitted.json'} and {output / 'whitted.png'}")
     return result
+
+
+# --- the slides' record: `cs451 slides record whitted` -------------------------------------------------------
+
+#: what `cs451 slides record whitted` measures (full; --quick: the tests' small run)
+SLIDE = {False: {"top": (320, 240), "spps": (1, 4, 9), "cutoffs": (0.5, 0.1, 0.01, 0.001)},
+         True: {"top": (64, 48), "spps": (1, 4), "cutoffs": (0.5, 0.01)}}
+SLIDE_COLUMNS = {
+    "sweep": "what varies: size, spp (samples per pixel) or cut-off; the others at the default (1 spp, cut-off 0.01, "
+             "the largest size)",
+    "value": "its value, as the figure labels it",
+    "width": "image width (pixels)", "height": "image height (pixels)", "spp": "samples per pixel",
+    "cutoff": "the β cut-off: a ray is cast while its weight is at least this",
+    "seconds": "median wall-clock seconds of a whole frame (render_traced, the reference on its numpy path)",
+    "seconds_min": "fastest repeat (wall clock)", "seconds_max": "slowest repeat (wall clock)",
+    "cpu_seconds": "median CPU seconds this process spent on the frame: what the figure plots, since other work on "
+                   "the machine delays the wall clock but not this (single-threaded numpy: the two agree on a quiet "
+                   "machine)",
+    "cpu_seconds_min": "fastest repeat (CPU)", "cpu_seconds_max": "slowest repeat (CPU)",
+    "rms_error": "RMS difference from the converged render (linear colour clipped to [0, 1], the converged image "
+                 "box-filtered to the size rendered)",
+    "rays": "rays cast: camera, shadow, reflected and refracted (the tracer's counters)",
+}
+
+
+def slide_record(quick: bool = False, repeats: int = 3) -> dict:
+    """The Whitted deck's time-against-error record (``cs451 slides record whitted``): Whitted's scene on the
+    reference's numpy path (its compiled kernels held off, as the other slides draw it) over image size, samples per
+    pixel and the cut-off, each frame's error against a converged render. Every configuration is rendered
+    ``repeats`` times, round-robin over the configurations, so that a busy moment of the machine weighs on all of
+    them alike; a configuration shared by two sweeps (the default) is measured once."""
+    from cs451.stages.whitted.accel import forced
+
+    plan = SLIDE[quick]
+    impl = load_impl(resolve_impl("reference", "whitted"), "whitted")
+    scene = load_scene("whitted")
+    top = tuple(plan["top"])
+    configs: dict[tuple, tuple[tuple[int, int], dict]] = {}
+    sweeps = []
+    for w, h in ((top[0] // 4, top[1] // 4), (top[0] // 2, top[1] // 2), top):
+        sweeps.append(("size", f"{w}×{h}", (w, h), DEFAULT))
+    sweeps += [("spp", str(s), top, {**DEFAULT, "spp": s}) for s in plan["spps"]]
+    sweeps += [("cut-off", f"{c:g}", top, {**DEFAULT, "min_weight": c}) for c in plan["cutoffs"]]
+    for _, _, size, opts in sweeps:
+        configs.setdefault((size, tuple(sorted(opts.items()))), (size, opts))
+    measured: dict[tuple, dict] = {key: {"seconds": [], "cpu": []} for key in configs}
+    bar = Progress("whitted: time against error", 1 + repeats * len(configs), unit="frame")
+    try:
+        with forced("numpy"):
+            _render(impl, scene, (16, 12))                              # imports and first calls, untimed
+            bar.advance(0, note="converged")
+            converged, _, converged_seconds = _render(impl, scene, top, **CONVERGED)
+            bar.advance(note="converged")
+            for _ in range(repeats):
+                for key, (size, opts) in configs.items():
+                    cpu = time.process_time()
+                    image, counters, seconds = _render(impl, scene, size, **opts)
+                    measured[key]["cpu"].append(time.process_time() - cpu)
+                    measured[key]["seconds"].append(seconds)
+                    truth = _downsample(converged, size)
+                    measured[key]["error"] = float(np.sqrt(np.mean((np.clip(image, 0, 1) - np.clip(truth, 0, 1)) ** 2)))
+                    measured[key]["rays"] = int(sum(counters[k] for k in ("camera", "shadow", "reflection",
+                                                                          "transmission")))
+                    bar.advance(note=f"{size[0]}×{size[1]} {opts}")
+    finally:
+        bar.close()
+    rows = []
+    for sweep, value, size, opts in sweeps:
+        m = measured[(size, tuple(sorted(opts.items())))]
+        rows.append({"sweep": sweep, "value": value, "width": size[0], "height": size[1], "spp": opts["spp"],
+                     "cutoff": opts["min_weight"], "seconds": float(np.median(m["seconds"])),
+                     "seconds_min": min(m["seconds"]), "seconds_max": max(m["seconds"]),
+                     "cpu_seconds": float(np.median(m["cpu"])), "cpu_seconds_min": min(m["cpu"]),
+                     "cpu_seconds_max": max(m["cpu"]), "rms_error": m["error"], "rays": m["rays"]})
+    return {"rows": rows, "columns": SLIDE_COLUMNS,
+            "params": {"scene": "whitted", "path": "numpy (the reference's compiled kernels held off)",
+                       "converged": CONVERGED, "converged_seconds": converged_seconds, "default": DEFAULT,
+                       "top": list(top), "options": {k: v for k, v in vars(stage.STAGE.options(scene)).items()
+                                                     if isinstance(v, (int, float, str, bool))}}}

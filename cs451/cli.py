@@ -120,7 +120,7 @@ def _cmd_demo(a: argparse.Namespace) -> int:
     window = True if a.window else (False if a.no_window else None)
     from .copy import default_impl
     paths = run_demo(stage=a.stage, impl=a.impl or default_impl(), output=a.output, window=window, frames=a.frames,
-                     scene=a.scene, size=a.size, screenshot=a.screenshot)
+                     scene=a.scene, size=a.size, screenshot=a.screenshot, fullscreen=a.fullscreen)
     if a.screenshot:
         print(f"wrote {a.screenshot} (the window, as the display shows it)")
     for p in paths:
@@ -206,10 +206,11 @@ def _demo_options(stages: list[str]) -> dict[str, tuple[str, str]]:
     """For --scene, --size and --screenshot: the demos that take each (asked of each stage's demo, by its
     parameters), and their default scenes."""
     import inspect
+    from .demos import demo_entry
     from .stages import get_stage
     out = {}
     for option in ("scene", "size", "screenshot"):
-        params = {name: inspect.signature(get_stage(name).demo).parameters for name in stages if get_stage(name).demo}
+        params = {name: inspect.signature(demo_entry(name)).parameters for name in stages if get_stage(name).demo}
         takers = [name for name, p in params.items() if option in p]
         defaults = [str(params[name][option].default) for name in takers]
         out[option] = (", ".join(takers) or "no demo here", ", ".join(defaults))
@@ -278,6 +279,7 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--size", help=f"{takes['size'][0]}: WIDTHxHEIGHT of the picture, overriding the scene's")
     d.add_argument("--screenshot", help=f"{takes['screenshot'][0]}: in the window, play the frames' script, save the "
                                         "window as the display shows it to this PNG, and close")
+    d.add_argument("--fullscreen", action="store_true", help="open the window full screen (f toggles it in any demo)")
     d.set_defaults(func=_cmd_demo)
 
     sc = sub.add_parser("scenes", help="list the bundled scenes", description="List the bundled scenes.")
@@ -373,6 +375,16 @@ def build_parser() -> argparse.ArgumentParser:
     slp.add_argument("--cache", help="folder for the rendered figures (default: .cs451-cache/slides in the kit)")
     slp.add_argument("--quick", action="store_true", help="small, fast figures (drafts)")
     slp.set_defaults(func=lambda a: slides_commands().cmd_pdf(a))
+    slr = slsub.add_parser("record", help="measure the benchmark figures' records (slides/records/NAME.json)",
+                           description="Measure what the decks' benchmark figures show and write each as "
+                                       "slides/records/NAME.json, with the machine, the date and this command: the "
+                                       "figures draw only from these records, never timing anything while a deck "
+                                       "is built. Run it on a quiet machine.")
+    slr.add_argument("names", nargs="*", metavar="NAME", help="whitted, hemicube, radiosity (default: all)")
+    slr.add_argument("--quick", action="store_true", help="small sizes (for tests; never commit a quick record)")
+    slr.add_argument("--repeats", type=int, default=3, help="each timing is the median of this many runs (at least 3)")
+    slr.add_argument("-o", "--output", help="folder for the records (default: slides/records in the kit)")
+    slr.set_defaults(func=lambda a: slides_commands().cmd_record(a))
     return p
 
 

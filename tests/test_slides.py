@@ -89,7 +89,9 @@ class StubFigures(types.ModuleType):
             ramp = np.stack([x * 255 / width, y * 255 / height, np.full(x.shape, 128.0)], axis=-1)
             image = np.where(stripes == 1, palette[1], palette[0]) * 0.7 + ramp * 0.3
             info = PngImagePlugin.PngInfo()
-            info.add_text("cs451:text_px", "40")           # as the real figures say it: text 40 PNG pixels high
+            # a stub says it holds no text: its shape is not the real figure's, so the size its text would show
+            # at says nothing (test 18 measures the real figures' text)
+            info.add_text("cs451:text_px", "0")
             Image.fromarray(image.astype(np.uint8)).save(path, pnginfo=info)
         return path
 
@@ -219,7 +221,7 @@ def test07_a_changed_reference_function_changes_its_figure_in_the_deck(tmp_path,
     again = build_slides(output=tmp_path / "b", deck="hemicube", cache=tmp_path / "cache", kit_root=kit)[0].path
     assert stub.drawn == [] and again.read_text() == first.read_text()     # a warm cache draws nothing
     tables = kit / "reference" / "hemicube" / "tables.py"
-    tables.write_text(tables.read_text().replace("h = 2.0 / r", "h = 2.0 / float(r)"))
+    tables.write_text(tables.read_text().replace("h = 2.0 / r", "h = 2.0 / r * 1.0"))
     changed = build_slides(output=tmp_path / "c", deck="hemicube", cache=tmp_path / "cache", kit_root=kit)[0].path
     assert stub.drawn == ["hemicube-delta-weights"]
 
@@ -311,7 +313,7 @@ def test11_a_changed_reference_function_changes_a_real_figures_cache_key(tmp_pat
     monkeypatch.setattr(registry, "REFERENCE", reference)
     before = {name: figures.figure_key(name) for name in ("hemicube-delta-weights", "sphere-gouraud-vs-phong")}
     tables = reference / "hemicube" / "tables.py"
-    tables.write_text(tables.read_text().replace("h = 2.0 / r", "h = 2.0 / float(r)"))
+    tables.write_text(tables.read_text().replace("h = 2.0 / r", "h = 2.0 / r * 1.0"))
     after = {name: figures.figure_key(name) for name in before}
     assert after["hemicube-delta-weights"] != before["hemicube-delta-weights"]
     assert after["sphere-gouraud-vs-phong"] == before["sphere-gouraud-vs-phong"]

@@ -1,4 +1,4 @@
-"""What ``cs451 slides build | check | pdf`` do, behind the command line's parsing (``cs451/cli.py``)."""
+"""What ``cs451 slides build | check | pdf | record`` do, behind the command line's parsing (``cs451/cli.py``)."""
 from __future__ import annotations
 
 import argparse
@@ -75,4 +75,11 @@ def cmd_pdf(a: argparse.Namespace) -> int:
                 except OSError as err:
                     raise KitError(f"-o {target}: cannot write there ({err.strerror or err})") from None
                 print(f"wrote {target} ({pages} pages, one per slide)")
+    return 0
+
+
+def cmd_record(a: argparse.Namespace) -> int:
+    """Measure the benchmark figures' records, one after another, and write them to slides/records/."""
+    from .records import record
+    record(a.names or None, quick=a.quick, repeats=a.repeats, folder=Path(a.output) if a.output else None)
     return 0

@@ -308,7 +308,7 @@ class _Reader:
             self.deck.images[target] = path
         picture = self.resolve(target, where) if self.resolve else Picture("", 0, 0)
         if picture.width:           # drawn at twice the slide's pixels: shown at half its size, or smaller
-            style.append(f"width:min(100%,{picture.width / 2:g}px)")
+            style.append(f"max-width:min(100%,{picture.width / 2:g}px)")   # height and width auto: never squashed
         style_attr = f' style="{";".join(style)}"' if style else ""
         text = f' data-text-px="{picture.text_px:g}"' if picture.text_px is not None else ""
         cap = f"<figcaption>{inline_html(caption, where)}</figcaption>" if caption else ""

@@ -4,18 +4,21 @@
 ``cs451/stages/<stage>/figures.py``, found through the registry of stages), each with one line that says what
 it shows. Every figure is drawn by the reference through its stage's interface (``get_stage(...)``: the
 stage's ``render``, its probes, ``Stage.call`` and ``functions_replaced``, its diagrams), the hemicube
-engine's pictures (:mod:`cs451.formfactors.pictures`), the engine's drawing (:mod:`cs451.drawing`) and the
-benchmarks' own functions (``bench/``, measured small), so a change to the reference changes the slides.
+engine's pictures (:mod:`cs451.formfactors.pictures`) and the engine's drawing (:mod:`cs451.drawing`), so a change
+to the reference changes the slides. Timings are never measured while a deck is built: the benchmark figures draw
+only from records (``slides/records/<name>.json``, :mod:`cs451.slides.records`) that ``cs451 slides record`` made,
+each naming its machine, date and command.
 
-The cache key of a figure is a hash of what made it: its name and parameters, the bundled scene files it
-reads, and the source text of the reference packages and kit modules that draw it (this module included).
+The cache key of a figure is a hash of what made it: its name and parameters, the bundled scene files and
+records it reads, and the source text of the reference packages and kit modules that draw it (this module included).
 Change one function of ``reference/hemicube`` and every figure drawn with it is made again; change a
 handout and none is. The PNG carries its key and the numbers it shows (a row sum, counters, timings) as
 text chunks: :func:`figure_facts` reads them back.
 
 Ray tracing figures run the reference's plain numpy path (its speed layer held off: ``accel.forced``): it gives
-the same colours as the compiled kernels (tests/test_whitted_frame.py), takes well under a second at slide
-sizes, and never waits for numba's first compile (~2 minutes on two cores). Not thread-safe: build figures in one thread, or in
+the same colours as the compiled kernels (tests/test_whitted_frame.py), takes a few seconds at slide sizes (renders
+are made at twice their shown size), and never waits for numba's first compile (~2 minutes on two cores); the path
+tracer's figure (128 passes of 208 × 208) takes about a minute. Not thread-safe: build figures in one thread, or in
 processes.
 """
 from __future__ import annotations
@@ -38,7 +41,8 @@ from ..progress import Progress
 from ..scene import BUNDLED_DIR
 from . import canvas, registry
 from .registry import SPECS, Drawn, Spec, spec_of
-FORMAT = 2                  # 2: figures at twice their shown size, with their smallest text noted
+FORMAT = 3                  # 2: figures at twice their shown size, with their smallest text noted; 3: measured
+                            # figures drawn from records (slides/records), text never under canvas.MIN_FONT_PT
 
 # --- the cache ------------------------------------------------------------------------------------------
 
@@ -58,7 +62,8 @@ def _package_files(folder: Path, label: str) -> list[tuple[str, Path]]:
 
 def figure_sources(name: str) -> list[tuple[str, Path]]:
     """Every file whose text enters figure ``name``'s cache key, labelled: reference packages, kit and bench
-    modules, scene files, the module that draws it, and the figures' shared modules (this one included)."""
+    modules, scene files, recorded measurements, the module that draws it, and the figures' shared modules (this
+    one included)."""
     spec = spec_of(name)
     files = [item for stage in spec.stages for item in _package_files(registry.REFERENCE / stage, f"reference/{stage}")]
     files += [item for stage in spec.engine
@@ -67,6 +72,9 @@ def figure_sources(name: str) -> list[tuple[str, Path]]:
     files += [(module, _module_file(module)) for module in modules]
     files += [(f"bench/{module}.py", KIT_ROOT / "bench" / f"{module}.py") for module in spec.bench]
     files += [(f"scenes/{scene}", BUNDLED_DIR / scene) for scene in spec.scenes]
+    if spec.records:
+        from . import records
+        files += [(f"slides/records/{name}.json", records.record_path(name, must_exist=True)) for name in spec.records]
     return files
 
 
@@ -101,7 +109,8 @@ def render_figure(name: str, cache: Path, quick: bool = False) -> Path:
     bar = Progress(f"figure {name}", spec.steps)
     canvas.TEXT_PX.clear()
     try:
-        drawn = spec.draw(bar, **(spec.quick if quick else spec.full))
+        with canvas.readable():
+            drawn = spec.draw(bar, **(spec.quick if quick else spec.full))
     finally:
         bar.close()
     _write_png(path, drawn, spec, key, min(canvas.TEXT_PX, default=None))

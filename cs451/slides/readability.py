@@ -64,11 +64,18 @@ MEASURE = r"""(() => {
             shown: [r.width, r.height], slidePx: r.width / scale, textPx: parseFloat(i.dataset.textPx || 'NaN'),
             rect: [r.left, r.top, r.right, r.bottom]};
   });
-  const chrome = [...document.querySelectorAll('.reveal .controls button, .reveal .slide-number')]
-    .filter(e => !hidden(e) && parseFloat(getComputedStyle(e).opacity) > 0)
+  // the left and right arrows (drawn on every slide of a flat deck, faint where disabled, fading in and out) and
+  // the slide number; the up and down arrows of vertical decks are never shown
+  const chrome = [...document.querySelectorAll('.reveal .controls .navigate-left, .reveal .controls .navigate-right,'
+                                               + ' .reveal .slide-number')].filter(e => !hidden(e))
     .map(e => e.getBoundingClientRect()).filter(r => r.width > 0 && r.height > 0)
     .map(r => [r.left, r.top, r.right, r.bottom]);
-  return {source: slide.dataset.source, scale: scale, runs: runs, wrapped: wrapped, images: images, chrome: chrome};
+  const inner = [...slide.querySelectorAll('*')].filter(e => !skip(e) && !e.ownerSVGElement)
+    .map(e => e.getBoundingClientRect()).filter(r => r.width > 0 && r.height > 0);
+  const overflow = [Math.max(0, ...inner.map(r => (r.right - box.left) / scale - cfg.width)),
+                    Math.max(0, ...inner.map(r => (r.bottom - box.top) / scale - cfg.height))];
+  return {source: slide.dataset.source, scale: scale, runs: runs, wrapped: wrapped, images: images, chrome: chrome,
+          overflow: overflow};
 })()"""
 
 
@@ -105,9 +112,17 @@ def judge(state: dict[str, Any], screen: tuple[int, int], floors: Floors, out: M
             if any(_meets(box, c) for c in state["chrome"]):
                 out.problems.append(f"{where}: text under the navigation controls: {run['text']!r}")
                 break
+    right, below = state.get("overflow", (0, 0))
+    if right > 1 or below > 1:
+        out.problems.append(f"{where}: the slide overflows its 1280×720 box by {right:.0f} px on the right and "
+                            f"{below:.0f} px at the bottom")
     for text in state["wrapped"]:
         out.problems.append(f"{where}: a line of code wraps or is cut off: {text!r}")
     for image in state["images"]:
+        (nw, nh), (sw, sh) = image["natural"], image["shown"]
+        if nw and nh and sw and sh and abs((sw / sh) / (nw / nh) - 1) > 0.02:
+            out.problems.append(f"{where}: {image['figure']}: shown {sw:.0f}×{sh:.0f}, squashed from its "
+                                f"{nw}×{nh} pixels")
         density = image["natural"][0] / max(image["slidePx"], 1e-9)
         out.figure_density = min(out.figure_density, density)
         if density < floors.figure_density - 0.01:

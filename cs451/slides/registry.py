@@ -40,6 +40,7 @@ class Spec:
     kit: tuple[str, ...] = ()        # kit modules that draw it (dotted names)
     bench: tuple[str, ...] = ()      # benchmark modules it measures with (bench/<name>.py)
     scenes: tuple[str, ...] = ()     # bundled scene files it reads (cs451/scenes/<file>)
+    records: tuple[str, ...] = ()    # recorded measurements it draws (slides/records/<name>.json)
     steps: int = 1                   # progress steps, for the bar
 
 

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import math
-import tempfile
-from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
@@ -17,9 +15,10 @@ from ...patches import patch_centers, patch_normals, scene_polygons
 from ...progress import Progress
 from ...scene import parse_scene
 from .. import get_stage
+from ...slides.records import declare_record
 from ...slides.registry import Drawn, slide_figure
-from ...slides.canvas import (Panel, canvas_pixels, encoded, new_canvas, panel_grid, png_pixels, project, quietly,
-                              reference_impl, scene_data)
+from ...slides.canvas import (MIN_FONT_PT, SCALE, Panel, canvas_pixels, encoded, new_canvas, panel_grid, project,
+                              reference_impl, scene_data, text_size)
 
 
 def views_of(impl: Any) -> Any:
@@ -143,7 +142,7 @@ def _patches_seen(parts: dict[str, np.ndarray]) -> int:
          "The five views of a hemicube (H2, H3, drawn with H4 into the engine's item buffers) standing on a patch "
          "of the Cornell box's red wall: the top face and the four half-height side faces, each cell in the colour "
          "of the patch it sees, beside where the patch is",
-         full={"split": 4, "resolution": 64, "scale": 4, "size": [300, 300], "shooter": SHOOTER},
+         full={"split": 4, "resolution": 64, "scale": 6, "size": [384, 384], "shooter": SHOOTER},
          quick={"resolution": 16, "scale": 2, "size": [96, 96]},
          stages=("hemicube",), kit=HEMICUBE_KIT, bench=("meshes",), scenes=("cornell-box.json",), steps=2)
 def _five_views(bar: Progress, split: int, resolution: int, scale: int, size: list[int],
@@ -158,12 +157,12 @@ def _five_views(bar: Progress, split: int, resolution: int, scale: int, size: li
     colours[patch] = (1.0, 0.9, 0.0)
     where = to_uint8(_patch_image(box.scene, box.quads, colours, tuple(size), views_of(reference_impl("hemicube"))))
     directions = [_face_direction(v) for v in parts["views"]]
-    rows = [[Panel(where, f"the patch (yellow) on the red wall\nof the Cornell box, {len(box.quads)} patches"),
-             Panel(top, f"top face: looks along the normal ({directions[0]})\n{resolution} × {resolution} cells")],
-            [Panel(side, f"{FACES[k + 1]}: looks toward {directions[k + 1]}\n{resolution} × {resolution // 2} cells")
+    rows = [[Panel(where, f"the patch (yellow), red wall\n{len(box.quads)} patches"),
+             Panel(top, f"top: along the normal ({directions[0]})\n{resolution} × {resolution} cells")],
+            [Panel(side, f"{FACES[k + 1]}: toward {directions[k + 1]}\n{resolution} × {resolution // 2} cells")
              for k, side in enumerate(sides)]]
-    grid = panel_grid(rows, f"Five views from one patch: together they see the whole hemisphere above it "
-                       f"({_patches_seen(parts)} patches)")
+    grid = panel_grid(rows, f"Five views from one patch see the whole hemisphere above it "
+                            f"({_patches_seen(parts)} patches)", pad=8)
     bar.advance(note="panels")
     return Drawn(grid, {"patch": patch, "patches_seen": _patches_seen(parts), "directions": directions,
                         "row_sum": float(parts["hemicube_rows"][0].sum())})
@@ -173,7 +172,7 @@ def _five_views(bar: Progress, split: int, resolution: int, scale: int, size: li
          "The unfolded item buffer of a patch on the Cornell box's red wall (cs451.formfactors.pictures, from "
          "stage 3's item-buffer probe): every cell holds the id of the patch it sees, drawn in that patch's colour, "
          "beside the scene with every patch in its id's colour",
-         full={"split": 4, "resolution": 64, "size": [360, 360], "shooter": SHOOTER},
+         full={"split": 4, "resolution": 64, "size": [512, 512], "shooter": SHOOTER},
          quick={"resolution": 16, "size": [96, 96]},
          stages=("hemicube",), kit=HEMICUBE_KIT, bench=("meshes",), scenes=("cornell-box.json",), steps=2)
 def _item_buffer(bar: Progress, split: int, resolution: int, size: list[int], shooter: dict[str, Any]) -> Drawn:
@@ -196,14 +195,13 @@ def _item_buffer(bar: Progress, split: int, resolution: int, size: list[int], sh
         spots = {0: (r / 2, r / 2), 1: (r / 2, r * 0.06), 2: (r / 2, r * 0.94), 3: (r * 0.94, r / 2),
                  4: (r * 0.06, r / 2)}      # where unfold() puts each face: top in the middle, side k on its edge
         for face, (x, y) in spots.items():
-            ax.text(x, y, f"{FACES[face]} ({directions[face]})", color="white", fontsize=7, ha="center",
+            ax.text(x, y, f"{FACES[face]} ({directions[face]})", color="white", ha="center",
                     va="center", rotation=90 if face in (3, 4) else 0,
                     bbox={"facecolor": "black", "alpha": 0.55, "pad": 1.5, "edgecolor": "none"})
-    panels = [Panel(painted, f"{len(box.quads)} patches, each in its id's colour\n(white: the patch whose hemicube "
-                           f"this is)"),
-              Panel(unfolded, f"its item buffer unfolded: top in the middle,\neach side against its edge "
-                              f"({_patches_seen(parts)} patches seen)", labels)]
-    grid = panel_grid([panels], "The item buffer: each cell holds the id of the patch it sees (H4)")
+    panels = [Panel(painted, f"{len(box.quads)} patches, each in its id's colour\n(white: this hemicube's patch)"),
+              Panel(unfolded, f"its item buffer unfolded: top in the\nmiddle, sides at the edges "
+                              f"({_patches_seen(parts)} seen)", labels)]
+    grid = panel_grid([panels], "The item buffer: each cell holds the id of the patch it sees (H4)", pad=8)
     bar.advance(note="panels")
     return Drawn(grid, {"patch": patch, "patches_seen": _patches_seen(parts), "directions": directions})
 
@@ -211,39 +209,41 @@ def _item_buffer(bar: Progress, split: int, resolution: int, size: list[int], sh
 @slide_figure("hemicube-delta-weights",
          "The delta form factors of notes eq. 7–9 from the reference's H1 (stage 3's tables probe) as heat maps on "
          "one colour scale: the top face (eq. 7) and a side face (eq. 8–9, one table for all four), with their sum",
-         full={"resolution": 32, "size": 300}, quick={"resolution": 16, "size": 128},
+         full={"resolution": 32, "size": 280}, quick={"resolution": 16, "size": 128},
          stages=("hemicube",), kit=("cs451.stages.hemicube", "cs451.stages.base"))
 def _delta_weights(bar: Progress, resolution: int, size: int) -> Drawn:
     tables = get_stage("hemicube").probes["tables"](reference_impl("hemicube"), resolution)
     top, side = tables["top"], tables["side"]
     vmax = float(max(top.max(), side.max()))
     total = float(top.sum() + 4 * side.sum())
-    margin, gap, bar_w, head = 72, 80, 16, 104
-    width = margin + size + gap + size + 60 + bar_w + 50
+    margin, gap, bar_w, head = 56, 70, 18, 96
+    heading = (f"Delta form factors at resolution {resolution} (ΔA = (2/{resolution})²): top + 4 sides = "
+               f"{total:.5f}")
+    width = max(margin + size + gap + size + 40 + bar_w + 90, text_size(heading, MIN_FONT_PT + 2, "bold")[0] + 30)
     height = head + size + 50
     fig = new_canvas(width, height)
     regions = {}
-    panels = (("top", top, (-1, 1, -1, 1), size, "x", "y", "top face, eq. 7:\n"
-               r"$\Delta F = \dfrac{\Delta A}{\pi\,(x^2 + y^2 + 1)^2}$"),
-              ("side", side, (-1, 1, 0, 1), size // 2, "y", "z", "side face, eq. 8–9:\n"
-               r"$\Delta F = \dfrac{z\,\Delta A}{\pi\,(y^2 + z^2 + 1)^2}$"))
+    panels = (("top", top, (-1, 1, -1, 1), size, "x", "y", "top face, eq. 7:\nΔF = ΔA / (π (x² + y² + 1)²)",
+               [-1, 0, 1]),
+              ("side", side, (-1, 1, 0, 1), size // 2, "y", "z", "side face, eq. 8–9:\nΔF = z ΔA / (π (y² + z² + 1)²)",
+               [0, 0.5, 1]))
     x = margin
-    for key, table, extent, h, xlabel, ylabel, title in panels:
+    for key, table, extent, h, xlabel, ylabel, title, yticks in panels:
         y = head + (size - h)          # the side face stands on the same base line as the top face
         ax = fig.add_axes((x / width, 1 - (y + h) / height, size / width, h / height))
         shown = ax.imshow(table, origin="lower", extent=extent, cmap="viridis", vmin=0.0, vmax=vmax,
                           interpolation="nearest", aspect="auto")
-        ax.set_xlabel(xlabel, fontsize=9)
-        ax.set_ylabel(ylabel, fontsize=9)
-        ax.tick_params(labelsize=8)
-        ax.set_title(title, fontsize=9)
-        regions[key] = [x, y, x + size, y + h]
+        ax.set_xticks([-1, 0, 1])
+        ax.set_yticks(yticks)
+        ax.set_xlabel(xlabel, labelpad=1)
+        ax.set_ylabel(ylabel, labelpad=1)
+        ax.set_title(title, linespacing=1.3)
+        regions[key] = [v * SCALE for v in (x, y, x + size, y + h)]     # in the PNG's pixels
         x += size + gap
-    colourbar = fig.add_axes(((x - gap + 60) / width, 1 - (head + size) / height, bar_w / width, size / height))
-    fig.colorbar(shown, cax=colourbar).ax.tick_params(labelsize=7)
-    colourbar.set_title("ΔF", fontsize=8)
-    fig.text(0.5, 1 - 8 / height, f"Delta form factors at resolution {resolution} (ΔA = (2/{resolution})²): "
-                                  f"top + 4 sides = {total:.5f}", ha="center", va="top", fontsize=10, weight="bold")
+    colourbar = fig.add_axes(((x - gap + 40) / width, 1 - (head + size) / height, bar_w / width, size / height))
+    fig.colorbar(shown, cax=colourbar, format="{x:.4f}")
+    colourbar.set_title("ΔF")
+    fig.text(0.5, 1 - 8 / height, heading, ha="center", va="top", fontsize=MIN_FONT_PT + 2, weight="bold")
     return Drawn(canvas_pixels(fig), {"resolution": resolution, "sum": total, "vmin": 0.0, "vmax": vmax, "cmap": "viridis",
                                 "regions": regions, "top_max": float(top.max()), "side_max": float(side.max())})
 
@@ -252,7 +252,7 @@ def _delta_weights(bar: Progress, resolution: int, size: int) -> Drawn:
          "A row of the form-factor matrix from a patch on the Cornell box's red wall (stage 3's rows probe: H1–H5 "
          "on the engine, no proximity fix), painted on the scene (cs451.formfactors.pictures), with the row sum "
          "over the box closed by its front wall (1 up to the tables' error) and over the open box",
-         full={"split": 6, "resolution": 128, "size": [360, 360], "shooter": SHOOTER},
+         full={"split": 6, "resolution": 128, "size": [600, 600], "shooter": SHOOTER},
          quick={"split": 2, "resolution": 32, "size": [96, 96]},
          stages=("hemicube",), kit=HEMICUBE_KIT, bench=("meshes",), scenes=("cornell-box.json",), steps=3)
 def _row(bar: Progress, split: int, resolution: int, size: list[int], shooter: dict[str, Any]) -> Drawn:
@@ -283,33 +283,88 @@ def _row(bar: Progress, split: int, resolution: int, size: list[int], shooter: d
                f"open box: {sum_open:.4f}")
     title = (f"One hemicube, one row: F from patch {patch} (circled)\nto each of {len(row)} patches, "
              f"resolution {resolution}\nbrightest: F = {row[brightest]:.4f}; dark blue: F = 0 (not seen)")
-    grid = panel_grid([[Panel(image, caption, mark)]], title, min_width=420)
+    grid = panel_grid([[Panel(image, caption, mark)]], title, pad=8)
     return Drawn(grid, {"patch": patch, "patches": len(row), "row_sum": sum_closed, "front_wall": front,
                         "open_row_sum": sum_open, "max": float(row.max()), "caption": caption})
 
 
 
+#: how each method of the hemicube record is drawn: (marker, colour, what its labels count)
+METHOD_STYLE = {"hemicube": ("o", "tab:blue", ""), "proximity fix": ("s", "tab:orange", ""),
+                "shooter split 4×4": ("^", "tab:green", ""), "ray casting": ("D", "tab:purple", " rays")}
+
+
+def _rays_label(n: int) -> str:
+    return f"{n // 1000}k" if n >= 1000 and n % 1000 == 0 else str(n)
+
+
+declare_record("hemicube", "Form factors where patches hide each other (the Cornell box, whole and cut 4 × 4): the hemicube "
+                           "at resolutions, the proximity fix and the split shooter, and ray casting, time against error "
+                           "from the area average", "hemicube_occluded")
+
+
 @slide_figure("bench-hemicube",
-         "cs451 bench hemicube's plot, measured small with its own functions: the closed-form configurations "
-         "(bench.hemicube.closed_forms) at resolutions 16 to 128, and the Cornell box's full matrix on its 16 "
-         "polygons (bench.hemicube.cornell, no subdivision, no ray casting) against resolution 256",
-         full={"resolutions": [16, 32, 64, 128], "reference_resolution": 256, "split": 1},
-         quick={"resolutions": [16, 32], "reference_resolution": 64},
-         stages=("hemicube",), kit=HEMICUBE_KIT, bench=("hemicube", "meshes"), scenes=("cornell-box.json",), steps=3)
-def _bench_hemicube(bar: Progress, resolutions: list[int], reference_resolution: int, split: int) -> Drawn:
-    from ...gl import create_context
-    bench, impl, ctx = bench_module("hemicube"), reference_impl("hemicube"), create_context()
-    forms = quietly(lambda: bench.closed_forms(impl, resolutions, ctx))
-    bar.advance(note="closed forms")
-    box = quietly(lambda: bench.cornell(impl, resolutions, reference_resolution, split, [], ctx))
-    bar.advance(note="Cornell box")
-    with tempfile.TemporaryDirectory(prefix="cs451-figure-") as folder:
-        bench._plot(Path(folder) / "hemicube.png", forms, box, resolutions)
-        image = png_pixels(Path(folder) / "hemicube.png")
+         "Form factors where patches hide each other, from the record (slides/records/hemicube.json, made by cs451 "
+         "slides record hemicube, never timed while the deck is built): the Cornell box as 16 polygons and cut 4 × 4, "
+         "the plain hemicube at resolutions 16 to 512, the proximity fix, the shooter split 4 × 4 and ray casting, "
+         "each method's time for the same rows against its error from the area average",
+         kit=("cs451.slides.records",), records=("hemicube",))
+def _bench_hemicube(bar: Progress) -> Drawn:
+    from ...slides.canvas import label_points, plain_log_ticks, plot_row
+    from ...slides.records import facts as record_facts, load_record, provenance
+    record = load_record("hemicube")
+    rows, params = record["rows"], record["params"]
+    cases = sorted({r["patches"] for r in rows})
+    truth = params["truth"]
+
+    def panel(patches: int) -> Any:
+        def draw(ax: Any) -> None:
+            for method, (marker, colour, unit) in METHOD_STYLE.items():
+                points = sorted((r for r in rows if r["patches"] == patches and r["method"] == method),
+                                key=lambda r: r["setting"])
+                if not points:
+                    continue
+                xs, ys = [r["seconds"] for r in points], [r["error"] for r in points]
+                ax.plot(xs, ys, marker=marker, color=colour, ms=6, lw=1.4)
+                label_points(ax, xs, ys, [_rays_label(r["setting"]) if method == "ray casting" else str(r["setting"])
+                                          for r in points], colour)
+            noise = truth[str(patches)]["noise"]
+            ax.axhline(noise, color="grey", ls="--", lw=1.2)
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.set_xlabel(f"seconds for {points[0]['rows']} rows of F" if points else "seconds")
+            ax.set_title(f"{patches} patches" + (" (its 16 polygons)" if patches == 16 else
+                                                 f" (each polygon cut {rows_of(patches)[0]['subdivision']} × "
+                                                 f"{rows_of(patches)[0]['subdivision']})"))
+            ax.grid(True, which="both", alpha=0.25)
+            ax.margins(x=0.15, y=0.15)
+            plain_log_ticks(ax)
+        return draw
+
+    def rows_of(patches: int) -> list[dict[str, Any]]:
+        return [r for r in rows if r["patches"] == patches]
+
+    draws = [panel(p) for p in cases]
+    first = draws[0]
+
+    def with_label(ax: Any) -> None:
+        first(ax)
+        ax.set_ylabel("mean relative row error")
+    draws[0] = with_label
+    caster = params["ray_caster"]
+    by = "Embree" if params.get("embree") else "the kit's CPU caster"
+    legend = [("hemicube, no fix (resolution)", {"color": "tab:blue", "marker": "o"}),
+              ("proximity fix (resolution)", {"color": "tab:orange", "marker": "s"}),
+              ("shooter split 4×4 (resolution)", {"color": "tab:green", "marker": "^"}),
+              (f"ray casting, {by} (rays per patch)", {"color": "tab:purple", "marker": "D"}),
+              ("the truth's own noise", {"color": "grey", "ls": "--"})]
+    rays = truth[str(cases[0])]["rays_per_patch"]
+    note = (f"Error: mean over rows of Σ|F − F*| / ΣF*, F* the area average by ray casting from random points of "
+            f"the shooter ({_rays_label(rays)} rays a patch, {by}"
+            f"{'' if params.get('embree') else ': Embree is not installed'}). {provenance(record)}.")
+    image = plot_row(1160, 240, draws, "Form factors where patches hide each other: time against error", legend,
+                     note)
     bar.advance(note="plot")
-    facts = {"closed_forms": [{k: f[k] for k in ("config", "resolution", "error", "seconds_per_row")} for f in forms],
-             "cornell": [{k: h[k] for k in ("resolution", "error", "seconds_matrix")} for h in box["hemicube"]],
-             "patches": box["patches"]}
-    return Drawn(image, facts)
-
-
+    table = {str(p): [{k: r[k] for k in ("method", "setting", "seconds", "error")} for r in rows_of(p)]
+             for p in cases}
+    return Drawn(image, {"table": table, "truth": truth, "ray_caster": caster, **record_facts(record)})

@@ -2,20 +2,18 @@
 """
 from __future__ import annotations
 
-import tempfile
-from pathlib import Path
 from types import SimpleNamespace
 from typing import Any, Callable
 
 import numpy as np
 
-from ...bench import bench_module
 from ...progress import Progress
 from ...scene import parse_scene
 from ...solvers import energy
 from .. import get_stage
+from ...slides.records import declare_record
 from ...slides.registry import Drawn, slide_figure
-from ...slides.canvas import Panel, encoded, panel_grid, png_pixels, quietly, reference_impl, scene_data
+from ...slides.canvas import Panel, encoded, panel_grid, reference_impl, scene_data
 from ..hemicube.figures import flat_corners
 
 
@@ -59,7 +57,7 @@ def _radiosity_image(scene: Any, system: dict[str, np.ndarray], display: np.ndar
 @slide_figure("radiosity-progress",
          "Progressive refinement (the reference's R3 through stage 4's probe) on the Cornell box after 1, 10 and 100 "
          "shots, drawn as B alone and as B + ρ·ambient (R4, the 1988 paper's preview term), with the unshot energy",
-         full={"patch_size": 50.0, "resolution": 64, "shots": [1, 10, 100], "size": [220, 220]},
+         full={"patch_size": 50.0, "resolution": 64, "shots": [1, 10, 100], "size": [256, 256]},
          quick={"patch_size": 140.0, "resolution": 32, "shots": [1, 10], "size": [64, 64]},
          stages=("radiosity",), engine=("hemicube",), kit=RADIOSITY_KIT, scenes=("cornell-box.json",), steps=5)
 def _progress(bar: Progress, patch_size: float, resolution: int, shots: list[int], size: list[int]) -> Drawn:
@@ -81,19 +79,19 @@ def _progress(bar: Progress, patch_size: float, resolution: int, shots: list[int
         left = energy(dB, a) / emitted
         facts["shots"][str(k)] = {"unshot": left, "ambient": term.tolist()}
         plain.append(Panel(_radiosity_image(scene, system, B, tuple(size)),
-                           f"after {k} shot{'s' * (k > 1)}: B alone\n{left:.0%} of the light not shot yet"))
+                           f"{k} shot{'s' * (k > 1)}: B alone\n{left:.0%} not shot yet"))
         ambient.append(Panel(_radiosity_image(scene, system, B + rho * term, tuple(size)),
-                             f"after {k} shot{'s' * (k > 1)}: B + ρ·ambient\nambient {term.mean():.3g}"))
+                             f"{k} shot{'s' * (k > 1)}: B + ρ·ambient\nambient {term.mean():.3g}"))
         bar.advance(note=f"{k} shots")
-    grid = panel_grid([plain, ambient], f"Progressive refinement on the Cornell box ({len(a)} patches):\n"
-                                         f"the ambient term stands in for the light not shot yet")
+    grid = panel_grid([plain, ambient], f"The ambient term stands in for the light not shot yet ({len(a)} patches)",
+                      pad=8)
     return Drawn(grid, facts)
 
 
 @slide_figure("radiosity-gouraud",
          "The converged radiosity of the Cornell box drawn flat (each patch its own B) and Gouraud-shaded from the "
          "vertex colours the reference's R5 averages from the adjoining patches",
-         full={"patch_size": 100.0, "resolution": 64, "size": [300, 300]},
+         full={"patch_size": 100.0, "resolution": 64, "size": [540, 540]},
          quick={"patch_size": 140.0, "resolution": 32, "size": [64, 64]},
          stages=("radiosity",), engine=("hemicube",), kit=RADIOSITY_KIT, scenes=("cornell-box.json",), steps=2)
 def _gouraud(bar: Progress, patch_size: float, resolution: int, size: list[int]) -> Drawn:
@@ -101,34 +99,106 @@ def _gouraud(bar: Progress, patch_size: float, resolution: int, size: list[int])
     B, _, order = _shoot(system, get_stage("radiosity").options(scene).tolerance)
     bar.advance(note="solve")
     panels = [Panel(_radiosity_image(scene, system, B, tuple(size), flat=True),
-                    f"flat: each of the {len(B)} patches in its own B"),
+                    f"flat: each of the {len(B)} patches\nin its own B"),
               Panel(_radiosity_image(scene, system, B, tuple(size)),
-                    "Gouraud: R5's vertex colours (the mean of\nthe adjoining patches), interpolated")]
-    grid = panel_grid([panels], "Displaying a radiosity solution (notes §2.3)")
+                    "Gouraud: R5's vertex colours (the mean\nof the adjoining patches), interpolated")]
+    grid = panel_grid([panels], "Displaying a radiosity solution (notes §2.3)", pad=8)
     bar.advance(note="drawn")
     return Drawn(grid, {"patches": len(B), "shots": len(order)})
 
 
 
+#: how each method of the radiosity record is drawn
+METHOD_STYLE = {"gauss-seidel": ("tab:blue", "o"), "sweeps": ("tab:red", ""), "maximum": ("tab:brown", "")}
+
+
+def _style(method: str) -> tuple[str, str]:
+    key = "gauss-seidel" if method.startswith("Gauss") else "maximum" if "largest" in method else "sweeps"
+    return METHOD_STYLE[key]
+
+
+def first_below(points: list[dict[str, Any]], target: float) -> dict[str, Any] | None:
+    """The first point of a curve at or below ``target`` error."""
+    return next((p for p in points if p["error"] <= target), None)
+
+
+declare_record("radiosity", "Solving the Cornell box (patches of 50): Gauss-Seidel on the full matrix against progressive "
+                            "shooting in the handout's order and in the paper's largest-first order, error and unshot energy "
+                            "against time with the form factors charged", "radiosity")
+
+
 @slide_figure("bench-radiosity",
-         "cs451 bench radiosity's plot, measured small with its own functions: every solver and shooting variant on "
-         "the Cornell box at one patch size (bench.radiosity.run_case), error of B against the direct solve over "
-         "time with the form factors charged",
-         full={"patch_size": 100.0, "resolution": 64}, quick={"patch_size": 140.0, "resolution": 32},
-         stages=("radiosity",), engine=("hemicube",), kit=RADIOSITY_KIT, bench=("radiosity", "shooting_orders"),
-         scenes=("cornell-box.json",), steps=2)
-def _bench_radiosity(bar: Progress, patch_size: float, resolution: int) -> Drawn:
-    bench = bench_module("radiosity")
-    case = quietly(lambda: bench.run_case(reference_impl("radiosity"), "cornell-box", patch_size, resolution))
-    bar.advance(note="solvers")
-    with tempfile.TemporaryDirectory(prefix="cs451-figure-") as folder:
-        bench.plot([case], Path(folder) / "radiosity.png")
-        image = png_pixels(Path(folder) / "radiosity.png")
+         "Solving the Cornell box, from the record (slides/records/radiosity.json, made by cs451 slides record "
+         "radiosity, never timed while the deck is built): Gauss-Seidel on the full matrix against progressive "
+         "shooting in the handout's order and largest first, the error of B against the direct solve over time with "
+         "the form factors charged, and the unshot energy shot by shot",
+         kit=("cs451.slides.records",), records=("radiosity",))
+def _bench_radiosity(bar: Progress) -> Drawn:
+    from ...slides.canvas import plain_log_ticks, plot_row
+    from ...slides.records import facts as record_facts, load_record, provenance
+    record = load_record("radiosity")
+    rows, params = record["rows"], record["params"]
+    methods = list(dict.fromkeys(r["method"] for r in rows))
+    curves = {m: [r for r in rows if r["method"] == m] for m in methods}
+    floor = 1e-6
+
+    def against_time(ax: Any) -> None:
+        for method, points in curves.items():
+            colour, marker = _style(method)
+            ax.plot([p["seconds"] for p in points], [max(p["error"], floor) for p in points], color=colour,
+                    marker=marker, ms=4, lw=1.8)
+        gs = next((points for method, points in curves.items() if method.startswith("Gauss")), None)
+        if gs:
+            ax.axvline(gs[0]["seconds"], color="tab:blue", ls=":", lw=1.2)
+            ax.annotate(f"all {params['patches']} rows\ncomputed", (gs[0]["seconds"], 0.97),
+                        xycoords=ax.get_xaxis_transform(), xytext=(-6, 0), textcoords="offset points", ha="right",
+                        va="top", color="tab:blue")
+        ax.axhline(0.01, color="grey", ls="--", lw=1)
+        ax.set_yscale("log")
+        ax.set_xlim(left=0)
+        ax.set_xlabel("seconds: form factors + solver")
+        ax.set_ylabel("relative error of B")
+        ax.set_title("error against time")
+        ax.grid(True, which="both", alpha=0.25)
+        plain_log_ticks(ax)
+
+    def against_shots(ax: Any) -> None:
+        for method, points in curves.items():
+            if method.startswith("Gauss"):
+                continue
+            colour, _ = _style(method)
+            shown = [p for p in points if p["step"] > 0 and p["unshot"] is not None]
+            ax.plot([p["step"] for p in shown], [p["unshot"] for p in shown], color=colour, lw=1.8)
+        ax.axvline(params["patches"], color="grey", ls=":", lw=1.2)
+        ax.annotate(f"{params['patches']} shots:\none a patch", (params["patches"], 0.03),
+                    xycoords=ax.get_xaxis_transform(), xytext=(-6, 0), textcoords="offset points", ha="right",
+                    va="bottom", color="grey")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("shots")
+        ax.set_ylabel("unshot energy")
+        ax.set_title("unshot energy, shot by shot")
+        ax.grid(True, which="both", alpha=0.25)
+        plain_log_ticks(ax)
+
+    legend = [(method, {"color": _style(method)[0], "marker": _style(method)[1] or None, "lw": 2.5})
+              for method in methods]
+    milestones = {}
+    for method, points in curves.items():
+        for target in (0.1, 0.01):
+            hit = first_below(points, target)
+            milestones.setdefault(method, {})[f"{target:g}"] = (None if hit is None else
+                                                                  {"seconds": hit["seconds"], "rows": hit["rows_computed"],
+                                                                   "step": hit["step"]})
+    note = (f"{params['patches']} patches, hemicubes of {params['resolution']}; the truth: the direct solve of the same "
+            f"matrix. Time: every method pays the same measured {1e3 * params['row_seconds']:.1f} ms a row of F for the "
+            f"rows it has computed (Gauss-Seidel all {params['patches']} before its first sweep), plus its solver's "
+            f"own time. {provenance(record)}.")
+    image = plot_row(1160, 300, [against_time, against_shots], f"The Cornell box, {params['patches']} patches: "
+                     "three ways to solve it", legend, note, widths=[1.2, 1])
     bar.advance(note="plot")
-    methods = {label: {k: m[k] for k in m if k.startswith(("seconds_to", "rows_to")) or k in ("rows", "shots")}
-               for label, m in case["methods"].items()}
-    return Drawn(image, {"patches": case["patches"], "methods": methods,
-                         "formfactor_seconds_per_row": case["formfactor_seconds_per_row"]})
+    return Drawn(image, {"patches": params["patches"], "row_seconds": params["row_seconds"],
+                         "milestones": milestones, **record_facts(record)})
 
 
 #: Every figure by name, with one line that says what it shows and how it is made.
