@@ -516,12 +516,12 @@ def test17_the_page_itself_refuses_to_fetch_anything(built, browser):
 
 
 #: Slides shown in the README's screenshots: (deck, a figure shown, or a heading's text).
-SCREENSHOTS = (("overview", "h2", "Four stages, one road"), ("overview", "figure", "radiosity-progress"),
+SCREENSHOTS = (("overview", "h2", "Five stages, one road"), ("overview", "figure", "radiosity-progress"),
                ("sphere", "figure", "sphere-modelview"), ("sphere", "figure", "sphere-gouraud-vs-phong"),
-               ("whitted", "h2", "The algorithm, one pixel at a time"), ("whitted", "figure", "whitted-ray-tree"),
-               ("hemicube", "h2", "Delta form factors"), ("hemicube", "figure", "hemicube-row"),
-               ("radiosity", "h2", "Progressive radiosity, as the notes write it"),
-               ("radiosity", "figure", "radiosity-progress"))
+               ("whitted", "h2", "The notes' algorithm: one pixel"), ("whitted", "figure", "whitted-ray-tree"),
+               ("hemicube", "h2", "H1 in the reference"), ("hemicube", "figure", "hemicube-row"),
+               ("radiosity", "h2", "R3: the shooting loop, as the notes write it"),
+               ("radiosity", "figure", "radiosity-progress"), ("radiosity", "figure", "bench-radiosity"))
 
 
 @pytest.mark.slow
@@ -548,6 +548,7 @@ def test18_the_decks_with_the_real_figures_open_offline_and_show_them(tmp_path, 
     other = next(cache.glob("bench-radiosity-*.png"))
     for deck, kind, what in SCREENSHOTS:
         page = browser.page()
+        page.viewport(1920, 1080)                       # as a 1080p projector shows it
         page.open((out / f"{deck}.html").as_uri())
         if kind == "figure":
             shot = figure_on_screen(page, what, next(cache.glob(f"{what}-[0-9a-f]*.png")),
