@@ -159,6 +159,7 @@ def raycast_numpy(polygons: np.ndarray, k: int, samples: int, seed: int, rows: l
     average, as :func:`cs451.formfactors.formfactor_matrix_raycast` with ``origin="area"``). Rays are cast against
     the whole polygons and a hit is placed in its patch by the subdivision's own map, so the cost does not grow with
     k. The kit's ray caster where Embree (an optional peer) is not installed. Returns (len(rows), n·k²)."""
+    from cs451.formfactors.raycast import cosine_rays
     from cs451.patches import patch_normals, patch_triangles
     quads, _ = subdivide_uniform(polygons, k)
     n = len(quads)
@@ -174,21 +175,7 @@ def raycast_numpy(polygons: np.ndarray, k: int, samples: int, seed: int, rows: l
         block = rows[start:start + chunk]
         m = len(block)
         b = np.repeat(np.array(block), samples)
-        a0, a1 = tri_area[2 * b], tri_area[2 * b + 1]
-        t = 2 * b + (rng.random(len(b)) * (a0 + a1) >= a0)
-        r1, r2 = rng.random(len(b)), rng.random(len(b))
-        s1 = np.sqrt(r1)
-        p = ((1 - s1)[:, None] * sub_tris[t, 0] + (s1 * (1 - r2))[:, None] * sub_tris[t, 1]
-             + (s1 * r2)[:, None] * sub_tris[t, 2])
-        nrm = sub_normals[b]
-        tangent = np.cross(nrm, np.where(np.abs(nrm[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]]))
-        tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
-        bitangent = np.cross(nrm, tangent)
-        u1, u2 = rng.random(len(b)), rng.random(len(b))
-        rad, phi = np.sqrt(u1), 2 * np.pi * u2
-        d = ((rad * np.cos(phi))[:, None] * tangent + (rad * np.sin(phi))[:, None] * bitangent
-             + np.sqrt(1 - u1)[:, None] * nrm)
-        o = p + nrm * (1e-5 * (1 + np.abs(p).max(axis=1)))[:, None]
+        o, d = cosine_rays(sub_tris, tri_area, sub_normals, b, rng)
         hit_t, tri = _closest(tris, o, d)
         hit = tri >= 0
         polygon = ids[np.where(hit, tri, 0)]

@@ -44,23 +44,7 @@ def formfactor_matrix_raycast(quads: Any, samples: int, seed: int = 0, rows: Ite
         block = rows[start:start + chunk]
         m = len(block)
         b = np.repeat(np.array(block), samples)
-        # a uniform point on patch i: pick one of its two triangles by area, then a uniform point in it
-        a0, a1 = tri_area[2 * b], tri_area[2 * b + 1]
-        second = rng.random(len(b)) * (a0 + a1) >= a0
-        t = 2 * b + second
-        r1, r2 = rng.random(len(b)), rng.random(len(b))
-        s1 = np.sqrt(r1)
-        p = (1 - s1)[:, None] * tris[t, 0] + (s1 * (1 - r2))[:, None] * tris[t, 1] + (s1 * r2)[:, None] * tris[t, 2]
-        if origin == "center":
-            p = centers[b]
-        nrm = normals[b]
-        tangent = np.cross(nrm, np.where(np.abs(nrm[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]]))
-        tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
-        bitangent = np.cross(nrm, tangent)
-        u1, u2 = rng.random(len(b)), rng.random(len(b))
-        rad, phi = np.sqrt(u1), 2 * np.pi * u2
-        d = (rad * np.cos(phi))[:, None] * tangent + (rad * np.sin(phi))[:, None] * bitangent + np.sqrt(1 - u1)[:, None] * nrm
-        start_at = p + nrm * (1e-5 * (1 + np.abs(p).max(axis=1)))[:, None]   # offset off the surface, scaled with |p|
+        start_at, d = cosine_rays(tris, tri_area, normals, b, rng, centers if origin == "center" else None)
         hit = scene.run(start_at.astype(np.float32), d.astype(np.float32))
         hit = np.asarray(hit)
         valid = hit >= 0
@@ -69,3 +53,26 @@ def formfactor_matrix_raycast(quads: Any, samples: int, seed: int = 0, rows: Ite
         key = np.repeat(np.arange(m), samples)[front] * n + j[front]
         out[start:start + m] = np.bincount(key, minlength=m * n).reshape(m, n) / samples
     return out
+
+
+def cosine_rays(tris: np.ndarray, tri_area: np.ndarray, normals: np.ndarray, b: np.ndarray,
+                rng: np.random.Generator, centers: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Rays leaving patches ``b`` (indices into quads split as triangles 2i and 2i + 1): from a uniform point of
+    the patch (one of its two triangles picked by area, then a uniform point in it), or from its centre where
+    ``centers`` is given, in a cosine-weighted direction about its normal. The start is lifted off the surface by
+    a distance that grows with |p|, so the ray cannot hit its own patch. Returns (origins, directions)."""
+    a0, a1 = tri_area[2 * b], tri_area[2 * b + 1]
+    t = 2 * b + (rng.random(len(b)) * (a0 + a1) >= a0)
+    r1, r2 = rng.random(len(b)), rng.random(len(b))
+    s1 = np.sqrt(r1)
+    p = (1 - s1)[:, None] * tris[t, 0] + (s1 * (1 - r2))[:, None] * tris[t, 1] + (s1 * r2)[:, None] * tris[t, 2]
+    if centers is not None:
+        p = centers[b]
+    nrm = normals[b]
+    tangent = np.cross(nrm, np.where(np.abs(nrm[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]]))
+    tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
+    bitangent = np.cross(nrm, tangent)
+    u1, u2 = rng.random(len(b)), rng.random(len(b))
+    rad, phi = np.sqrt(u1), 2 * np.pi * u2
+    d = (rad * np.cos(phi))[:, None] * tangent + (rad * np.sin(phi))[:, None] * bitangent + np.sqrt(1 - u1)[:, None] * nrm
+    return p + nrm * (1e-5 * (1 + np.abs(p).max(axis=1)))[:, None], d
