@@ -352,28 +352,22 @@ def build_parser() -> argparse.ArgumentParser:
                                     "the reference's figures inside: they open offline.")
     slsub = sl.add_subparsers(dest="action", required=True, metavar="ACTION")
     slb = slsub.add_parser("build", help="build one deck or all of them")
-    slb.add_argument("deck", nargs="?", help=f"overview, {', '.join(stages)} (default: all)")
+    _deck_options(slb, stages)
     slb.add_argument("-o", "--output", required=True, help="folder for the HTML files (one per deck)")
-    slb.add_argument("--cache", help="folder for the rendered figures (default: .cs451-cache/slides in the kit)")
-    slb.add_argument("--quick", action="store_true", help="small, fast figures (drafts)")
     slb.set_defaults(func=lambda a: slides_commands().cmd_build(a))
     slc = slsub.add_parser("check", help="measure the decks in headless Chromium as a projector shows them",
                            description="Build the decks and measure every slide at 1920×1080 and 1280×720 in headless "
                                        "Chromium: text under 24 px, code under 20 px or wrapped, figure text under "
                                        "16 px, figures with fewer than 2 pixels per slide pixel, anything under the "
                                        "navigation controls. Exits 1 if any is found.")
-    slc.add_argument("deck", nargs="?", help=f"overview, {', '.join(stages)} (default: all)")
-    slc.add_argument("--cache", help="folder for the rendered figures (default: .cs451-cache/slides in the kit)")
-    slc.add_argument("--quick", action="store_true", help="small, fast figures (drafts; figures then fail the density floor)")
+    _deck_options(slc, stages, "small, fast figures (drafts; figures then fail the density floor)")
     slc.add_argument("--json", metavar="FILE", help="also write the measurements to FILE")
     slc.set_defaults(func=lambda a: slides_commands().cmd_check(a))
     slp = slsub.add_parser("pdf", help="print the decks to PDF (one slide a page) with headless Chromium",
                            description="Build the decks and print each to a PDF, one slide a page, in headless Chromium "
                                        "once reveal.js has laid them out for print.")
-    slp.add_argument("deck", nargs="?", help=f"overview, {', '.join(stages)} (default: all)")
+    _deck_options(slp, stages)
     slp.add_argument("-o", "--output", required=True, help="a .pdf file for one deck, or a folder (one PDF per deck)")
-    slp.add_argument("--cache", help="folder for the rendered figures (default: .cs451-cache/slides in the kit)")
-    slp.add_argument("--quick", action="store_true", help="small, fast figures (drafts)")
     slp.set_defaults(func=lambda a: slides_commands().cmd_pdf(a))
     slr = slsub.add_parser("record", help="measure the benchmark figures' records (slides/records/NAME.json)",
                            description="Measure what the decks' benchmark figures show and write each as "
@@ -386,6 +380,14 @@ def build_parser() -> argparse.ArgumentParser:
     slr.add_argument("-o", "--output", help="folder for the records (default: slides/records in the kit)")
     slr.set_defaults(func=lambda a: slides_commands().cmd_record(a))
     return p
+
+
+def _deck_options(parser: argparse.ArgumentParser, stages: list[str],
+                  quick: str = "small, fast figures (drafts)") -> None:
+    """What every ``cs451 slides`` action that builds decks takes: the deck, the figures' cache, draft figures."""
+    parser.add_argument("deck", nargs="?", help=f"overview, {', '.join(stages)} (default: all)")
+    parser.add_argument("--cache", help="folder for the rendered figures (default: .cs451-cache/slides in the kit)")
+    parser.add_argument("--quick", action="store_true", help=quick)
 
 
 def _joined_values(argv: list[str]) -> list[str]:
