@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import base64
 import os
+import re
 import tempfile
 from pathlib import Path
 
@@ -49,5 +50,4 @@ def print_deck(browser: Chromium, html: Path, pdf: Path) -> int:
 
 def page_count(data: bytes) -> int:
     """Pages of a PDF as Chromium writes it (one ``/Type /Page`` object each)."""
-    import re
     return len(re.findall(rb"/Type\s*/Page[^s]", data))
