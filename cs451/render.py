@@ -9,7 +9,8 @@ from .imageio import save_png
 from .limits import check_image_size
 from .impl import load_impl, resolve_impl
 from .scene import load_scene
-from .stages import get_stage, stage_names
+from .stages import check_options, get_stage, stage_names
+from .stages.base import check_not_empty
 
 
 def parse_size(text: str | None) -> tuple[int, int] | None:
@@ -31,6 +32,7 @@ def parse_size(text: str | None) -> tuple[int, int] | None:
 def infer_stage(scene) -> str:
     """The stage to draw a scene with when ``--stage`` is not given, asked of the stages: the one its ``options``
     name among those that draw it; none named, the first that draws it; several named, the user chooses."""
+    check_not_empty(scene)
     drawing = [name for name in stage_names() if get_stage(name).draws_scene(scene)]
     named = [name for name in drawing if name in scene.options]
     if len(named) > 1:
@@ -47,6 +49,7 @@ def render_scene(*, scene: str, output: str | Path, impl: str = "reference", siz
     from .imageio import check_output
     check_output(output)
     sc = load_scene(scene)
+    check_options(sc)
     st = get_stage(stage or student_stage() or infer_stage(sc))
     st.check_scene(sc)
     st.check_cost(sc, parse_size(size))

@@ -62,8 +62,9 @@ class Camera:
             raise ctx.child("far").error(f"must be at most {MAX_DEPTH_RATIO:g} × near (a depth buffer cannot tell "
                                          f"depths apart beyond that), got far/near = {self.far / self.near:.3g}")
         view = [c - e for c, e in zip(self.center, self.eye)]
-        if not any(view):
-            raise ctx.child("center").error("must differ from eye")
+        if max(abs(c) for c in view) <= max(schema.MIN_LENGTH, 1e-12 * max(map(abs, (*self.eye, *self.center)))):
+            raise ctx.child("center").error(f"must differ from eye {list(self.eye)} (the view direction is center - "
+                                            f"eye), got {list(self.center)}")
         cross = (view[1] * self.up[2] - view[2] * self.up[1],
                  view[2] * self.up[0] - view[0] * self.up[2],
                  view[0] * self.up[1] - view[1] * self.up[0])
@@ -102,6 +103,12 @@ class DirectionalLight(Light):
     specular: Vec3 = field("Specular colour.", (1.0, 1.0, 1.0), schema.non_negative)
 
 
+#: the most shadow rays per area light and shading point: a 64 × 64 grid. Each is a light sample that every
+#: shading point visits, so 10⁶ of them turn a second's render into days
+MAX_LIGHT_SAMPLES = 4096
+LIGHT_SAMPLES_WHY = "a 64 × 64 grid; every shading point casts one shadow ray to each"
+
+
 @Light.register("area")
 @dataclass(frozen=True)
 class AreaLight(Light):
@@ -109,7 +116,16 @@ class AreaLight(Light):
     edge_u: Vec3 = field("First edge vector from the corner.", check=schema.nonzero_vector)
     edge_v: Vec3 = field("Second edge vector from the corner; the light emits on the side of edge_u × edge_v.", check=schema.nonzero_vector)
     radiance: Vec3 = field("Emitted radiance (linear RGB).", check=schema.non_negative)
-    samples: int = field("Shadow rays per shading point (ray tracing).", 16, schema.positive)
+    samples: int = field("Shadow rays per shading point (ray tracing).", 16,
+                         schema.between(1, MAX_LIGHT_SAMPLES, LIGHT_SAMPLES_WHY))
+
+    def validate(self, ctx: Context) -> None:
+        u, v = self.edge_u, self.edge_v
+        scale = max(abs(c) for c in u) * max(abs(c) for c in v)
+        cross = (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
+        if max(abs(c) for c in cross) <= 1e-9 * scale:
+            raise ctx.child("edge_v").error(f"is parallel to edge_u {list(u)}: the light would have no area, got "
+                                            f"{list(v)}")
 
 
 @dataclass(frozen=True)
@@ -151,6 +167,10 @@ class Plane(Object):
     checker_material: str = field("Material of the odd squares of the checkerboard.", "default")
 
 
+#: the most corners of one polygon: past a few thousand a shape is a mesh (an OBJ file), and a polygon's corners
+#: are each checked in Python as the scene loads
+MAX_POLYGON_VERTICES = 10_000
+
 #: how far a polygon's corner may lie off its plane, as a fraction of its size (the Cornell box's
 #: measured walls are off by up to 0.14%)
 NON_PLANAR = 0.01
@@ -159,7 +179,9 @@ NON_PLANAR = 0.01
 @Object.register("polygon")
 @dataclass(frozen=True)
 class Polygon(Object):
-    vertices: list[Vec3] = field("Corners of a planar convex polygon, counter-clockwise seen from the front.")
+    vertices: list[Vec3] = field("Corners of a planar convex polygon, counter-clockwise seen from the front "
+                                 f"(3 to {MAX_POLYGON_VERTICES:,}).", check=schema.max_items(MAX_POLYGON_VERTICES,
+                                 "a larger shape is a mesh: an OBJ file"))
     material: str = field("Name of a material in `materials`.", "default")
 
     def validate(self, ctx: Context) -> None:
@@ -167,18 +189,30 @@ class Polygon(Object):
         v = np.asarray(self.vertices, dtype=float)
         if len(v) < 3:
             raise ctx.child("vertices").error(f"needs at least 3 vertices, got {len(v)}")
-        n = np.zeros(3)
-        for a, b in zip(v, np.roll(v, -1, axis=0)):  # Newell's normal: robust for any planar polygon
-            n += np.cross(a, b)
+        repeated = np.flatnonzero((v == np.roll(v, -1, axis=0)).all(axis=1))
+        if len(repeated):
+            k = int(repeated[0])
+            raise ctx.child("vertices").child((k + 1) % len(v)).error(
+                f"repeats the corner before it, {list(self.vertices[k])} (a degenerate edge: drop one)")
+        n = np.cross(v, np.roll(v, -1, axis=0)).sum(axis=0)   # Newell's normal: robust for any planar polygon
         scale = max(float(np.ptp(v, axis=0).max()), 1e-300)
         if np.linalg.norm(n) <= 1e-12 * scale * scale:
             raise ctx.child("vertices").error("degenerate polygon (zero area: repeated or collinear vertices)")
-        off = np.abs((v - v.mean(axis=0)) @ (n / np.linalg.norm(n)))   # distances from the mean plane
+        n = n / np.linalg.norm(n)
+        off = np.abs((v - v.mean(axis=0)) @ n)   # distances from the mean plane
         if off.max() > NON_PLANAR * scale:
             k = int(off.argmax())
             raise ctx.child("vertices").child(k).error(
                 f"the polygon is not planar: this corner is {off[k]:.4g} off its plane, {off[k] / scale:.1%} of the "
                 f"polygon's size (at most {NON_PLANAR:.0%}; split it into triangles)")
+        edges = np.roll(v, -1, axis=0) - v
+        turns = np.cross(edges, np.roll(edges, -1, axis=0)) @ n   # each corner's turn, against the normal
+        reflex = np.flatnonzero(turns < -1e-9 * scale * scale)
+        if len(reflex):   # a fan from the first corner would cover ground outside the polygon, or twice
+            k = (int(reflex[0]) + 1) % len(v)
+            raise ctx.child("vertices").child(k).error(
+                f"the polygon is not convex: it turns the wrong way at this corner, {list(self.vertices[k])} "
+                f"(split it into convex polygons or triangles)")
 
 
 @Object.register("mesh")
@@ -300,20 +334,48 @@ def resolve_scene_path(name_or_path: str | Path) -> Path:
 
     A bundled name wins over a folder of the same name (a student's repository holds a
     package folder named after its stage, ``whitted/``, beside the bundled scene ``whitted``).
+    Anything that is not a regular file is named as what it is, never opened: a FIFO would block the read and
+    ``/dev/zero`` would fill memory.
     """
     p = Path(name_or_path)
     bundled = BUNDLED_DIR / f"{name_or_path}.json"
-    if p.is_file():
-        return p
-    if p.suffix == ".json":
-        raise KitError(f"{p}: scene file not found")
-    if "/" not in str(name_or_path) and bundled.exists():
+    if "/" not in str(name_or_path) and p.suffix != ".json" and not p.is_file() and bundled.exists():
         return bundled
-    if p.is_dir():
-        raise KitError(f"{p}: a folder, not a scene file (bundled scenes: {', '.join(bundled_scenes())})")
-    raise KitError(f"unknown scene {str(name_or_path)!r}: not a file, and not a bundled scene "
-                   f"(bundled: {', '.join(bundled_scenes())})")
+    kind = file_kind(p)
+    if kind == "file":
+        return p
+    if kind == "missing" and p.suffix != ".json" and "/" not in str(name_or_path):
+        raise KitError(f"unknown scene {str(name_or_path)!r}: not a file, and not a bundled scene"
+                       f"{schema.suggestion(name_or_path, bundled_scenes())} (bundled: {', '.join(bundled_scenes())})")
+    if kind == "missing":
+        raise KitError(f"{p}: scene file not found")
+    raise KitError(f"{p}: {kind}, not a scene file (a scene is a JSON file; bundled scenes: "
+                   f"{', '.join(bundled_scenes())})")
 
+
+def file_kind(path: Path) -> str:
+    """What ``path`` is, for messages: "file", "missing", or what else it is ("a folder", "a named pipe
+    (FIFO)", "a character device (/dev/zero)"), found without opening it."""
+    import stat
+    try:
+        mode = path.stat().st_mode     # follows a link: a link to /dev/zero is a device
+    except FileNotFoundError:
+        return "a broken symbolic link" if path.is_symlink() else "missing"
+    except OSError as err:
+        return f"unreadable ({err.strerror})"
+    if stat.S_ISREG(mode):
+        return "file"
+    target = f" ({path.resolve()})" if path.is_symlink() else ""
+    kinds = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a named pipe (FIFO)"), (stat.S_ISCHR, "a character device"),
+             (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+    return next((f"{what}{target}" for test, what in kinds if test(mode)), f"not a regular file{target}")
+
+
+#: the largest scene file: the bundled ones are a few kilobytes, and a JSON file of this size already takes a
+#: few hundred megabytes as Python objects; big geometry belongs in an OBJ mesh
+MAX_SCENE_BYTES = 16 * 2**20
+#: the most objects in a scene, counted before any is parsed (groups' children included)
+MAX_OBJECTS = 100_000
 
 TOO_DEEP = f"nested too deeply (groups nest at most {MAX_GROUP_DEPTH} deep)"
 
@@ -322,21 +384,43 @@ def load_scene(name_or_path: str | Path) -> Scene:
     """Load and validate a scene; raises InputError naming the file and field on bad input."""
     path = resolve_scene_path(name_or_path)
     label = str(path) if path.parent != BUNDLED_DIR else f"{path.stem} (bundled scene {path.name})"
+    size = path.stat().st_size
+    if size > MAX_SCENE_BYTES:
+        raise InputError(label, "", f"{size / 2**20:.1f} MB, over the {MAX_SCENE_BYTES // 2**20} MB a scene file may "
+                                    f"be (put large geometry in an OBJ file and name it in a mesh object)")
     try:
-        data = json.loads(path.read_text(), parse_constant=_refuse_constant)
+        text = path.read_bytes().decode("utf-8")
+        data = json.loads(text, parse_constant=_refuse_constant, object_pairs_hook=schema.json_object)
+    except UnicodeDecodeError as err:
+        raise InputError(label, f"byte {err.start}", "not UTF-8 text (a scene file is JSON)") from None
     except json.JSONDecodeError as err:
         raise InputError(label, f"line {err.lineno} column {err.colno}", f"invalid JSON: {err.msg}") from None
     except ValueError as err:
         raise InputError(label, "", str(err)) from None
     except RecursionError:
         raise InputError(label, "", TOO_DEEP) from None
+    except OSError as err:
+        raise InputError(label, "", f"cannot be read ({err.strerror})") from None
     return parse_scene(data, label, source=str(path))
+
+
+def _count_objects(objects: Any, depth: int = 0) -> int:
+    if not isinstance(objects, list) or depth > MAX_GROUP_DEPTH:
+        return 0
+    return len(objects) + sum(_count_objects(o.get("objects"), depth + 1) for o in objects if isinstance(o, dict))
 
 
 def parse_scene(data: Any, label: str = "<scene>", source: str = "") -> Scene:
     """Validate a scene given as a JSON-like dict (Mitsuba-style: scenes are plain dicts too)."""
-    if isinstance(data, dict) and "source" in data:
-        raise InputError(label, "source", "unknown field (set by the loader, not by the file)")
+    if isinstance(data, dict):
+        if "source" in data:
+            raise InputError(label, "source", "unknown field (set by the loader, not by the file)")
+        count = _count_objects(data.get("objects"))
+        if count > MAX_OBJECTS:
+            raise InputError(label, "objects", f"{count:,} objects, over the {MAX_OBJECTS:,} a scene may hold (a "
+                                               f"large shape belongs in an OBJ file, named by one mesh object)")
+        if isinstance(data.get("$schema"), str):   # an editor's pointer to docs/scene.schema.json
+            data = {k: v for k, v in data.items() if k != "$schema"}
     try:
         scene = schema.parse_record(Scene, data, Context(label))
     except RecursionError:

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from .errors import KitError
+from .objfile import load_mesh
 from .scene import BUNDLED_DIR
 
 #: Relative offset of spawned rays: (1 + max|p|) · SPAWN_OFFSET along the normal. Float64 hit points
@@ -181,37 +182,6 @@ def _stratified(n: int, seed: int) -> np.ndarray:
     i, j = np.meshgrid(np.arange(cols), np.arange(rows), indexing="xy")
     jitter = rng.random((2, rows, cols))
     return np.stack([((i + jitter[0]) / cols).ravel(), ((j + jitter[1]) / rows).ravel()], axis=1)
-
-
-#: Meshes already read, by (path, modification time, size): a scene rendered again (a demo's frames, the
-#: bench's sweeps) does not parse its OBJ again. Callers get copies.
-_MESHES: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
-
-
-def load_mesh(path: Path, where: str) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices and triangles of an OBJ file, through trimesh; a KitError naming the scene field on failure."""
-    if not path.is_file():
-        raise KitError(f"{where}: mesh file {path} not found")
-    stat = path.stat()
-    key = (str(path.resolve()), stat.st_mtime_ns, stat.st_size)
-    if key not in _MESHES:
-        if len(_MESHES) >= 8:
-            _MESHES.clear()
-        _MESHES[key] = _read_mesh(path, where)
-    v, f = _MESHES[key]
-    return v.copy(), f.copy()
-
-
-def _read_mesh(path: Path, where: str) -> tuple[np.ndarray, np.ndarray]:
-    import trimesh
-    try:
-        mesh = trimesh.load(path, force="mesh", process=False)
-    except Exception as err:  # trimesh raises many kinds on a malformed file
-        raise KitError(f"{where}: cannot read {path.name}: {type(err).__name__}: {err}") from None
-    v, f = np.asarray(mesh.vertices, np.float64), np.asarray(mesh.faces, np.int64)
-    if len(f) == 0:
-        raise KitError(f"{where}: {path.name} has no triangles")
-    return v, f
 
 
 def build(scene: Any, max_depth: int = 5, min_weight: float = 0.01, light_samples: int | None = None) -> TraceScene:

@@ -72,8 +72,9 @@ def demo_entry(stage: str) -> Callable[..., list[Path]]:
 def check_demo_scene(stage: str, scene: str | Path) -> None:
     """Refuse, in one line, a scene the stage's demo cannot draw, naming the scene and the stages that can."""
     from ..scene import load_scene
-    from ..stages import stage_names
+    from ..stages import check_options, stage_names
     loaded = load_scene(scene)                       # an unknown name or a bad file: its own one line
+    check_options(loaded)
     try:
         get_stage(stage).check_scene(loaded)
         return

@@ -33,3 +33,16 @@ def get_stage(name: str) -> Stage:
     if name not in stages:
         raise KitError(f"unknown stage {name!r} (stages: {', '.join(stages)})")
     return stages[name]
+
+
+def check_options(scene: object) -> None:
+    """Refuse a scene whose ``options`` name a stage that does not exist, or hold a bad option of any stage,
+    not only of the one about to run: a typo in ``options.radiosity`` must not wait for the day someone
+    renders the scene with stage 4."""
+    from ..schema import suggestion
+    stages = _registry()
+    for name in getattr(scene, "options", {}):
+        if name not in stages:
+            raise KitError(f"{scene.label}: options.{name}: no stage is called {name!r}"  # type: ignore[attr-defined]
+                           f"{suggestion(name, stages)} (stages: {', '.join(stages)})")
+        stages[name].options(scene)

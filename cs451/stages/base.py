@@ -178,7 +178,9 @@ class Stage:
         return True
 
     def check_scene(self, scene: Any) -> None:
-        """Refuse a scene holding an object or light this stage does not draw, naming the first and the stage."""
+        """Refuse a scene holding an object or light this stage does not draw, naming the first and the stage,
+        or nothing at all to draw (before any kernel is compiled for it)."""
+        check_not_empty(scene)
         for group in ("objects", "lights"):
             for k, item in enumerate(getattr(scene, group)):
                 if not isinstance(item, self.draws):
@@ -205,6 +207,13 @@ class Stage:
         anchor = f"{task.id}-{task.title}".lower().replace(" ", "-")
         anchor = "".join(c for c in anchor if c.isalnum() or c == "-")
         return f"assignments/{self.handout}/README.md#{anchor}"
+
+
+def check_not_empty(scene: Any) -> None:
+    """Refuse a scene with nothing in it: every pixel would be the background, and a stage would still compile
+    its kernels (two minutes, the first time) to find that out."""
+    if not scene.objects:
+        raise KitError(f"{scene.label}: objects: the scene has no objects, so every pixel would be the background")
 
 
 def _kind(cls: type) -> str:

@@ -397,10 +397,17 @@ def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
     from ...limits import Cost
     w, h = size or (scene.image.width, scene.image.height)
     costs = [Cost("image.width", 64.0 * w * h, f"a {w}x{h} image")]
-    for obj, where in walk_objects(scene.objects):
-        if isinstance(obj, Sphere):
-            costs.append(Cost(f"{where.path}.slices", MESH_CELL_BYTES * obj.slices * obj.stacks,
-                              f"a mesh of {obj.slices} × {obj.stacks} cells"))
+    spheres = [(obj, where) for obj, where in walk_objects(scene.objects) if isinstance(obj, Sphere)]
+    if len(spheres) == 1:   # one sphere: its tessellation is the field to blame
+        (obj, where), = spheres
+        costs.append(Cost(f"{where.path}.slices", MESH_CELL_BYTES * obj.slices * obj.stacks,
+                          f"a mesh of {obj.slices} × {obj.stacks} cells"))
+    elif spheres:           # many: their number is, unless one of them alone asks for most of it
+        cells = [obj.slices * obj.stacks for obj, _ in spheres]
+        k = max(range(len(cells)), key=cells.__getitem__)
+        field = f"{spheres[k][1].path}.slices" if 2 * cells[k] > sum(cells) else "objects"
+        costs.append(Cost(field, MESH_CELL_BYTES * sum(cells), f"{len(spheres):,} sphere meshes of "
+                                                                f"{sum(cells):,} cells in all"))
     return costs
 
 

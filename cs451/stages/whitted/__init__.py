@@ -18,6 +18,7 @@ from ...scene import AreaLight, Camera, Mesh, Plane, PointLight, Polygon, Scene,
 from ...schema import Context
 from ..base import Out, Probes, Stage, Task, as_array, functions_replaced, part
 from . import tolerances
+from . import cost
 from .options import MAX_DEPTH, WhittedOptions
 
 RAYS = "len(origins)"
@@ -45,16 +46,8 @@ TASKS = (
 )
 
 
-#: bytes per camera ray of a frame (its sub-pixel samples included), measured on the reference: 100-110 at
-#: 320 × 240 with 16 and 64 samples per pixel; with margin
-RAY_BYTES = 160
-
-
 def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
-    from ...limits import Cost
-    w, h = size or (scene.image.width, scene.image.height)
-    spp = STAGE.options(scene).spp
-    return [Cost("options.whitted.spp", RAY_BYTES * w * h * spp, f"{w * h * spp:,} camera rays ({w}x{h}, {spp} per pixel)")]
+    return cost.estimate(scene, size, STAGE.options(scene))
 
 
 # --- calling the student's functions, with checks on what they return --------

@@ -5,6 +5,7 @@ import math
 from dataclasses import dataclass
 
 from ... import schema
+from ...scene import LIGHT_SAMPLES_WHY, MAX_LIGHT_SAMPLES
 from ...schema import Context, field
 
 
@@ -15,7 +16,7 @@ class WhittedOptions:
                               schema.non_negative)
     spp: int = field("Samples per pixel on a regular grid (1, 4, 9, 16, …: a square).", 1, schema.positive)
     light_samples: int = field("Shadow rays per area light and shading point, overriding each light's `samples` (0: keep).",
-                               0, schema.non_negative)
+                               0, schema.between(0, MAX_LIGHT_SAMPLES, LIGHT_SAMPLES_WHY))
 
     def validate(self, ctx: Context) -> None:
         if math.isqrt(self.spp) ** 2 != self.spp:
