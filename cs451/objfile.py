@@ -46,8 +46,8 @@ def _read_mesh(path: Path, where: str) -> tuple[np.ndarray, np.ndarray]:
         mesh = trimesh.load(path, force="mesh", process=False)
     except Exception as err:  # trimesh raises many kinds on a malformed file: find the line ourselves
         found = _obj_problem(path)
-        why = f"line {found[0]}: {found[1]}" if found else f"{type(err).__name__}: {err}"
-        raise KitError(f"{where}: cannot read {path.name}: {why}") from None
+        why = f"{path.name}, line {found[0]}: {found[1]}" if found else f"cannot read {path.name}: {err}"
+        raise KitError(f"{where}: {why}") from None
     v, f = np.asarray(mesh.vertices, np.float64), np.asarray(mesh.faces, np.int64)
     if len(f) == 0:
         raise KitError(f"{where}: {path.name} has no triangles")

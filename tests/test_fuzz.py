@@ -9,6 +9,7 @@ from __future__ import annotations
 import copy
 import json
 import random
+import re
 from pathlib import Path
 
 import pytest
@@ -143,3 +144,73 @@ def test_an_internal_error_is_one_line_with_a_way_to_the_traceback(capsys, monke
     assert main(["render", "sphere", "-o", "x.png"]) == 3
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "ZeroDivisionError" in err and "CS451_TRACEBACK=1" in err
+
+
+def _typo(word: str, rng: random.Random) -> str:
+    """One edit: two letters swapped, or one dropped, doubled or changed."""
+    k = rng.randrange(len(word) - 1)
+    edits = (word[:k] + word[k + 1] + word[k] + word[k + 2:], word[:k] + word[k + 1:], word[:k] + word[k] * 2 + word[k:],
+             word[:k] + rng.choice("aeiouxz") + word[k + 1:])
+    return rng.choice([e for e in edits if e != word] or [word + "x"])
+
+
+def _hostile(name: str, data: dict, rng: random.Random) -> tuple[str, str]:
+    """A scene's text with one mistake of a class the issue-38 corpus found, and what the refusal must say."""
+    d = copy.deepcopy(data)
+    kind = rng.choice(("duplicate", "typo", "concave", "zero-area", "tiny-vector", "non-finite"))
+    objects = [o for o in d["objects"] if o.get("type") in ("sphere", "polygon", "plane")]
+    if kind == "typo":
+        record = rng.choice([d["camera"], d["image"]] + objects)
+        key = rng.choice([k for k in record if k != "type" and len(k) > 3])
+        wrong = _typo(key, rng)
+        if wrong in record:
+            return json.dumps(d), ""
+        record[wrong] = record.pop(key)
+        return json.dumps(d), f"{wrong}: unknown field"
+    if kind == "concave":
+        s = rng.uniform(0.05, 0.45)     # the third corner pulled inside the square: a reflex corner
+        d["objects"].append({"type": "polygon", "vertices": [[0, 0, 0], [2, 0, 0], [s, 0, s], [0, 0, 2]]})
+        return json.dumps(d), "not convex"
+    if kind == "zero-area":
+        u, k = [rng.uniform(-1, 1) for _ in range(3)], rng.choice((2, -0.5, 3))
+        d["lights"].append({"type": "area", "corner": [0, 1, 0], "edge_u": u, "edge_v": [k * c for c in u],
+                            "radiance": [1, 1, 1]})
+        return json.dumps(d), "no area"
+    if kind == "tiny-vector":
+        tiny = [0.0, 10.0 ** -rng.randint(31, 320), 0.0]
+        d["camera"]["up"] = tiny
+        return json.dumps(d), "too short to give a direction"
+    if kind == "non-finite":
+        d["camera"]["fovy"] = 30.0
+        value = rng.choice(("NaN", "Infinity", "-Infinity", "1e400", "-1e999"))
+        text = re.sub(r'"fovy": [^,}]+', f'"fovy": {value}', json.dumps(d))
+        return text, "not allowed in a scene file" if value[-1].isalpha() else "camera.fovy: must be a finite number"
+    text = json.dumps(d)                # duplicate: a key of the camera given again
+    return text.replace('"camera": {', '"camera": {"eye": [9, 9, 9], ', 1), "camera.eye: appears twice"
+
+
+HOSTILE_CASES = 240
+
+
+def test_hostile_classes_are_refused_in_one_line_naming_what_is_wrong(originals, tmp_path):
+    """Issue 38's classes, with random parameters: every one refused in one line naming the file, and saying
+    what is wrong; misspelt keys each with a suggestion of the key meant."""
+    rng = random.Random(38)
+    outcomes: dict[str, int] = {}
+    names = sorted(originals)
+    for case in range(HOSTILE_CASES):
+        name = names[case % len(names)]
+        text, expected = _hostile(name, originals[name], rng)
+        if not expected:
+            continue
+        path = tmp_path / f"hostile{case}.json"
+        path.write_text(text)
+        with pytest.raises(KitError) as err:
+            load_scene(path)
+        one_line(err.value, path.name)
+        assert expected in str(err.value), (case, str(err.value))
+        if "unknown field" in expected:
+            assert "did you mean" in str(err.value), str(err.value)
+        outcomes[expected.split(":")[-1].strip()] = outcomes.get(expected.split(":")[-1].strip(), 0) + 1
+    print(f"\n{sum(outcomes.values())} hostile scenes, all refused in one line: {outcomes}")
+    assert len(outcomes) >= 6 and sum(outcomes.values()) > HOSTILE_CASES * 0.8, outcomes
