@@ -112,7 +112,8 @@ def test_a_fresh_venv_installs_the_wheel_and_grades_a_folder_in_the_sandbox(whee
         assert done.returncode == 0 and "total with the hidden tests: 100 / 100" in done.stdout, done.stdout[-2000:] + done.stderr[-1500:]
         assert "isolation: bubblewrap" in done.stdout
 
-        # the starter, which takes the installed kit's reference if it can read it: it must score nothing
+        # the starter, which takes the installed kit's reference if it can read it: it must score nothing (exit 1:
+        # under full marks)
         site = subprocess.run([str(python), "-c", "import cs451_kit, os; print(os.path.dirname(cs451_kit.__path__[0]))"],
                               capture_output=True, text=True).stdout.strip() or str(next((top / "venv" / "lib").glob(
                                   "python3*/site-packages")))
@@ -121,6 +122,6 @@ def test_a_fresh_venv_installs_the_wheel_and_grades_a_folder_in_the_sandbox(whee
         init.write_text(init.read_text() + STEAL.format(reference=f"{site}/cs451_kit/reference/sphere"))
         os.system(f"chmod -R a+rX {top}")
         done = _cs451(python, "grade", "sphere", "--submission", str(top / "thief"), cwd=top)
-        assert done.returncode == 0 and "total with the hidden tests: 0 / 100" in done.stdout, done.stdout[-2000:] + done.stderr[-1500:]
+        assert done.returncode == 1 and "total with the hidden tests: 0 / 100" in done.stdout, done.stdout[-2000:] + done.stderr[-1500:]
     finally:
         shutil.rmtree(top, ignore_errors=True)

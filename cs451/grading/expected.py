@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from .. import ENGINE_DIR, KIT_ROOT, instructor_only
+from ..caches import cache_home
 from ..errors import KitError
 from .probes import run_trusted_probe
 from .spec import TRUTH_MODULES, Outputs, Ref, Test
@@ -59,9 +60,16 @@ def is_student_copy(stage: str) -> bool:
 
 
 def cache_root(cache_dir: Path | None = None) -> Path:
-    """The answer cache, private to the grader's user (no submission may read or replace an answer)."""
-    root = cache_dir or KIT_ROOT / ".cs451-cache"
-    root.mkdir(mode=0o700, exist_ok=True)
+    """The answer cache, private to the grader's user (no submission may read or replace an answer): the kit's
+    ``.cs451-cache``, or the user's cache folder where the kit cannot be written (a read-only install), which
+    the sandbox then hides too (:func:`.runner.protected_paths`)."""
+    if cache_dir is not None:
+        cache_dir.mkdir(mode=0o700, exist_ok=True)
+        return cache_dir
+    root = cache_home()
+    root.mkdir(mode=0o700, parents=True, exist_ok=True)
+    if root != KIT_ROOT / ".cs451-cache" and root.stat().st_mode & 0o077:   # made earlier by another cache's user
+        root.chmod(0o700)
     return root
 
 

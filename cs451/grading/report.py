@@ -17,7 +17,7 @@ from jinja2 import Environment, PackageLoader, select_autoescape
 from PIL import Image as PILImage
 
 from ..compare import flip_error
-from .runner import GradeResult
+from .runner import GradeResult, TestResult
 from .untrusted import printable
 
 CAPTIONS = {"reference": "reference (as <code>cs451 render</code> writes it)",
@@ -91,6 +91,12 @@ def figures(images: dict[str, np.ndarray]) -> list[dict]:
     return out
 
 
+def failures_first(results: list[TestResult]) -> list[TestResult]:
+    """The tests that lost points, then those that passed, each group in test order: what to fix comes first. A
+    hidden test's outcome moves only hidden rows, so the visible rows' order says nothing about it."""
+    return [r for r in results if not r.verdict.passed] + [r for r in results if r.verdict.passed]
+
+
 def _row(r) -> dict:
     status, word = _status(r)
     return {"number": r.test.number, "name": printable(r.test.name), "score": r.score, "points": r.test.points,
@@ -115,7 +121,7 @@ def render_report(result: GradeResult, show_hidden: bool = True) -> str:
         hidden_score=sum(r.score for r in held), hidden_total=sum(r.test.points for r in held),
         hidden_note=hidden_note(result, show_hidden),
         extension_note=extension_line(result) if result.extensions else "", problems=[printable(p) for p in result.problems],
-        rows=[_row(r) for r in shown],
+        rows=[_row(r) for r in failures_first(shown)],
         failed=failed, passed=passed)
 
 

@@ -96,13 +96,15 @@ def write_results(path: str | Path, result: GradeResult) -> Path:
 
 
 def format_table(result: GradeResult, width: int = 100) -> str:
-    """The per-test table printed by ``cs451 grade``: every failure's message whole, wrapped under its test.
+    """The per-test table printed by ``cs451 grade``: failures first (in test order), every failure's message
+    whole, wrapped under its test, then the tests that passed.
 
     Its totals count the visible tests; with hidden tests graded, one more line (the grader's) counts them too."""
     import textwrap
+    from .report import failures_first
     indent = " " * 27
     lines = [f"{'test':<7} {'points':>11}  {'':4} name / message", "-" * width]
-    for r in result.results:
+    for r in failures_first(result.results):
         t = r.test
         mark = "ok" if r.verdict.passed else ("part" if r.score > 0 else "FAIL")
         hidden = " [hidden]" if t.hidden else (" [optional]" if t.extension else "")

@@ -21,6 +21,7 @@ from typing import Any, Iterator
 import numpy as np
 
 from .. import ENGINE_DIR, KIT_ROOT
+from ..caches import cache_home
 from ..errors import KitError, SubmissionError
 from ..impl import resolve_impl
 from ..progress import Progress
@@ -134,7 +135,8 @@ def _score(test: Test, verdict: Verdict) -> float:
 def protected_paths(extra: tuple[Path, ...] = ()) -> list[Path]:
     """What no submission may read: the kit's reference, specs, tests, history and cached answers, and ``extra``."""
     names = ("reference", "autograder", "starter", "tests", "bench", ".git", ".cs451-cache", "assignments")
-    return [KIT_ROOT / n for n in names] + list(extra)
+    cache = cache_home()   # the user's, where the kit cannot be written: the answers are there then
+    return [KIT_ROOT / n for n in names] + ([cache] if cache != KIT_ROOT / ".cs451-cache" else []) + list(extra)
 
 
 def engine_sources(stage: str) -> list[tuple[Path, str]]:
