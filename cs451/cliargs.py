@@ -171,6 +171,8 @@ def _commands() -> argparse.ArgumentParser:
                         description="List the bundled scenes: the stages that draw each (* marks the one `cs451 "
                                     "render SCENE` uses) and what it is.")
     sc.add_argument("--json", action="store_true", help="print a JSON list (name, description, stages, render) instead")
+    sc.add_argument("--schema", action="store_true", help="print the scene format as a JSON Schema, for an editor "
+                                                          "(docs/scene.schema.json holds the same)")
     sc.set_defaults(func=cmd_scenes)
 
     ag = sub.add_parser("autograder", help="the autograder's own steps" if mine else "build or run the Gradescope autograder",

@@ -191,6 +191,10 @@ def cmd_scenes(a: argparse.Namespace) -> int:
     from .render import infer_stage
     from .scene import bundled_scenes, load_scene
     from .stages import get_stage, stage_names
+    if a.schema:
+        from .scene_schema import schema_text
+        print(schema_text(), end="")
+        return 0
     mine = student_stage()
     rows = []
     for name in bundled_scenes():

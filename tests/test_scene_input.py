@@ -230,3 +230,16 @@ def test_the_cgroup_limit_is_the_process_own(monkeypatch, tmp_path):
     monkeypatch.setattr(Path, "read_text", read)
     cap, where = limits._cgroup_limit()
     assert cap == 768 * 2**20 and where.endswith("grader/job7/memory.limit_in_bytes")
+
+
+def test_scenes_schema_prints_the_schema_and_a_scene_may_point_at_it(tmp_path, capsys):
+    from cs451.cli import main
+    from cs451.scene_schema import SCHEMA_FILE
+    assert main(["scenes", "--schema"]) == 0
+    assert capsys.readouterr().out == SCHEMA_FILE.read_text()
+    path = tmp_path / "pointing.json"
+    path.write_text(json.dumps({"$schema": "../docs/scene.schema.json", **bundled("sphere")}))
+    assert load_scene(path).name == "sphere"
+    path.write_text(json.dumps({"$schema": 3, **bundled("sphere")}))
+    with pytest.raises(KitError, match=r"\$schema: unknown field"):
+        load_scene(path)

@@ -14,7 +14,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ... import schema
+from ... import progress, schema
 from ...scene import AreaLight, Polygon, Scene
 from ...schema import Context, field
 from ..base import Out, Probes, Stage, Task, part
@@ -138,7 +138,8 @@ def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, **_: An
     if opts.view == "itembuffer":
         return item_buffer_image(ff, opts.patch, size)
     image = formfactor_image(scene, quads, ff.row(opts.patch), ff.calls, size)
-    print(f"patch {opts.patch}: {ff.summary()}", file=sys.stderr)   # row sums, reciprocity, closure: every run
+    if not progress.quiet():   # row sums, reciprocity, closure: every run but a --quiet one
+        print(f"patch {opts.patch}: {ff.summary()}", file=sys.stderr)
     return image
 
 

@@ -229,14 +229,17 @@ def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, quiet: 
     refusal comes first. Prints a one-line summary (every counter with ``--verbose``, nothing when ``quiet``)
     and shows the shooting's progress toward the tolerance.
     """
-    from ...progress import verbose
+    from ...progress import quiet as quiet_line, verbose, warn
     opts = STAGE.options(scene, **overrides)
     patches = make_patches(scene, impl, opts.patch_size)
     gloss = glossy.highlight(scene, patches, opts.specular_samples) if opts.specular else None  # refused before solving
     with shooting_progress(patches, opts) as on_shot:
         sol = solve(patches, impl, opts, on_shot=on_shot)
-    if not quiet:
-        print(("" if sol.converged else "warning: ") + (sol.message if verbose() else sol.summary), file=sys.stderr)
+    text = sol.message if verbose() else sol.summary
+    if not sol.converged:
+        warn(text)
+    elif not (quiet or quiet_line()):
+        print(text, file=sys.stderr)
     return draw_solution(scene, impl, patches, sol.display, size, opts.exposure, highlight=gloss)
 
 

@@ -32,8 +32,11 @@ def _say_compiling() -> Any:
 
 
 def _say() -> None:
+    from ....progress import quiet
     if not _said[0]:
         _said[0] = True
+        if quiet():
+            return
         print(f"compiling the ray tracer's kernels, once (~{COMPILE_SECONDS} s on two cores; later runs load them "
               f"from numba's cache)", file=sys.stderr, flush=True)
 
@@ -81,7 +84,8 @@ def compiled(kernel: Any, args: tuple) -> None:
         config.SLP_VECTORIZE = old
     if key is not None:
         ready.add(key)
-    if _said[0] and time.perf_counter() - start > 1.0:
+    from ....progress import quiet
+    if _said[0] and time.perf_counter() - start > 1.0 and not quiet():
         print(f"  {kernel.__name__}: {time.perf_counter() - start:.0f} s", file=sys.stderr, flush=True)
 
 
