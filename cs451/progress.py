@@ -73,6 +73,10 @@ class Progress:
             threading.Thread(target=_tick, args=(weakref.ref(self.bar), self._stop, self._drawn, delay), daemon=True,
                              name=f"progress: {label}").start()
 
+    def set_total(self, total: int) -> None:
+        """The number of items, once known (a bar started before its job had counted them)."""
+        self.bar.total = max(int(total), 1)
+
     def advance(self, n: int = 1, note: str = "") -> None:
         """One more item done (``n``), and ``note`` (what is being done now) beside the bar."""
         if note:

@@ -361,3 +361,39 @@ def test_quiet_shows_no_bar(capsys):
     bar.advance()
     bar.close()
     assert stream.getvalue() == ""
+
+
+def test_grading_starts_its_bar_before_it_loads_tests_answers_or_a_sandbox(monkeypatch):
+    """The seconds before the first test (loading tests, the reference's answers, the sandbox) are under the bar."""
+    from cs451.grading import runner
+    made, seen = [], []
+    real = runner.Progress
+
+    class Recorded(real):
+        def __init__(self, *a, **k):
+            made.append(a[0])
+            super().__init__(*a, **k)
+    monkeypatch.setattr(runner, "Progress", Recorded)
+    real_load = runner.load_tests
+    monkeypatch.setattr(runner, "load_tests", lambda *a, **k: (seen.append(list(made)), real_load(*a, **k))[1])
+    runner.grade(runner.get_stage("sphere").name, "reference", include_hidden=False, tasks=["S1"])
+    assert seen == [["grading sphere"]]
+
+
+def test_a_long_whitted_render_is_traced_in_bands_under_a_bar(monkeypatch):
+    """A render estimated past a second is traced in bands (its bar moves), and the bands join into the very image
+    one call draws."""
+    import numpy as np
+    from cs451.impl import load_impl, resolve_impl
+    from cs451.scene import load_scene
+    from cs451.stages import get_stage
+    from cs451.stages import whitted
+    stage = get_stage("whitted")
+    scene, impl = load_scene("cornell-spheres"), load_impl(resolve_impl("reference", "whitted"), "whitted")
+    assert len(whitted.cost.bands(120_000, whitted.cost.trace_seconds(scene, 120_000, stage.options(scene)))) == 1
+    whole = whitted.render(scene, impl, (24, 18))
+    monkeypatch.setattr(whitted.cost, "BANDED_SECONDS", 0.0)
+    monkeypatch.setattr(whitted.cost, "BAND_SECONDS", 1e-4)
+    assert len(whitted.cost.bands(24 * 18, 1e-3 + whitted.cost.trace_seconds(scene, 24 * 18, stage.options(scene)))) > 1
+    banded = whitted.render(scene, impl, (24, 18))
+    np.testing.assert_array_equal(banded, whole)

@@ -174,14 +174,30 @@ def grade(stage: str, submission: str | Path, include_hidden: bool = True, show_
     code has run.
     """
     start = time.perf_counter()
-    get_stage(stage)
-    if fresh is None:
-        fresh = include_hidden and not is_student_copy(stage)
-    secret = variant_secret() if fresh else None
-    tests = [t for t in load_tests(stage, include_hidden, secret) if tasks is None or t.task in tasks]
-    if test_timeout is not None:
-        tests = [replace(t, timeout=test_timeout) for t in tests]
-    out = GradeResult(stage, str(submission))
+    # drawn from the start (within a second), not once the tests, answers and sandbox are ready: they take seconds
+    bar = Progress(f"grading {stage}", 1) if show_progress else None
+    try:
+        get_stage(stage)
+        if fresh is None:
+            fresh = include_hidden and not is_student_copy(stage)
+        secret = variant_secret() if fresh else None
+        tests = [t for t in load_tests(stage, include_hidden, secret) if tasks is None or t.task in tasks]
+        if test_timeout is not None:
+            tests = [replace(t, timeout=test_timeout) for t in tests]
+        if bar:
+            bar.set_total(len(tests))
+        return _grade(GradeResult(stage, str(submission)), stage, submission, tests, bar, start, total_timeout, jobs,
+                      include_hidden, protected, unwritable, submission_memory)
+    finally:
+        if bar:
+            bar.close()
+
+
+def _grade(out: GradeResult, stage: str, submission: str | Path, tests: list[Test], bar: "Progress | None",
+           start: float, total_timeout: float, jobs: int | None, include_hidden: bool, protected: tuple[Path, ...],
+           unwritable: tuple[Path, ...], submission_memory: int | None) -> GradeResult:
+    """:func:`grade` once its tests are chosen: the trusted reference in plain subprocesses, anything else in the
+    sandbox."""
     if not include_hidden or is_student_copy(stage):  # a student copy has no hidden tests to run: say so
         out.hidden_not_run = hidden_summary(stage)
     reference = ReferenceAnswers(stage)
@@ -189,7 +205,7 @@ def grade(stage: str, submission: str | Path, include_hidden: bool = True, show_
     if str(submission) == TRUSTED:
         out.isolation = "the kit's own reference (trusted): each test in a plain subprocess with limits"
         probes = _TrustedProbes(stage, resolve_impl(TRUSTED, stage))
-        _grade_tests(out, tests, probes, reference, truths, start + total_timeout, jobs, show_progress)
+        _grade_tests(out, tests, probes, reference, truths, start + total_timeout, jobs, bar)
         out.seconds = time.perf_counter() - start
         return out
     upload = KIT_ROOT / "starter" if str(submission) == "starter" else Path(submission).expanduser()
@@ -208,13 +224,13 @@ def grade(stage: str, submission: str | Path, include_hidden: bool = True, show_
             out.problems.append(box.staged.note())
         probes = _SandboxedProbes(box, stage, box.visible(impl))
         _grade_tests(out, tests, probes, reference, truths, start + total_timeout,
-                     jobs if box.parallel else 1, show_progress)
+                     jobs if box.parallel else 1, bar)
     out.seconds = time.perf_counter() - start
     return out
 
 
 def _grade_tests(out: GradeResult, tests: list[Test], probes: Any, reference: ReferenceAnswers, truths: TruthValues,
-                 deadline: float, jobs: int | None, show_progress: bool) -> None:
+                 deadline: float, jobs: int | None, bar: "Progress | None") -> None:
     """The interface probe, then every test: workers in parallel threads, checks here, one at a time."""
     probe = probes.run("__interface__", {}, None, 60.0)
     if not probe.ok:  # the submission does not even import: every test gets the same reason
@@ -223,6 +239,8 @@ def _grade_tests(out: GradeResult, tests: list[Test], probes: Any, reference: Re
         return
     out.problems += _problems(probe.outputs)
     prepared: dict[int, tuple[Outputs | None, Outputs] | TestResult] = {}
+    if bar:
+        bar.advance(0, note="the reference's answers")
     for i, t in enumerate(tests):  # trusted answers first: the reference's runs are not charged to the submission
         try:
             prepared[i] = expected_for(t, reference, truths)
@@ -237,7 +255,6 @@ def _grade_tests(out: GradeResult, tests: list[Test], probes: Any, reference: Re
             return TestResult(tests[i], 0.0, Verdict(0.0, "not run: the time limit for the whole submission was reached"))
         return probes.run(tests[i].probe, tests[i].params, prepared[i][0], min(tests[i].timeout, remaining))
 
-    bar = Progress(f"grading {out.stage}", len(tests)) if show_progress else None
     results: dict[int, TestResult] = {}
     workers = max(1, jobs or min(2, os.cpu_count() or 1))
     with ThreadPoolExecutor(max_workers=workers) as pool:
@@ -254,8 +271,6 @@ def _grade_tests(out: GradeResult, tests: list[Test], probes: Any, reference: Re
                 done.outputs = {}   # judged: the answer is let go before the next test starts
             if bar:
                 bar.advance(note=tests[i].number)
-    if bar:
-        bar.close()
     out.results = _name_failing_dependencies(out.stage, _edge_cases_need_the_main_tests([results[i] for i in range(len(tests))]))
 
 

@@ -13,6 +13,7 @@ from typing import Any, Callable
 import numpy as np
 
 from ... import tracescene, schema
+from ...progress import Progress
 from ...errors import KitError
 from ...scene import AreaLight, Camera, Mesh, Plane, PointLight, Polygon, Scene, Sphere, parse_scene
 from ...schema import Context
@@ -88,10 +89,21 @@ def render_traced(scene: Scene, impl: Any, size: tuple[int, int] | None = None, 
     opts = STAGE.options(scene, spp=spp)
     width, height = size or (scene.image.width, scene.image.height)
     k = math.isqrt(opts.spp)
-    ts = prepare(scene, impl, **trace_options)
-    origins, directions = _camera_rays(impl, scene.camera, width * k, height * k)
-    colours = STAGE.call(impl, "W11", ts, origins, directions)
-    image = colours.reshape(height, k, width, k, 3).mean(axis=(1, 3))
+    rays = width * k * height * k
+    parts = cost.bands(rays, cost.trace_seconds(scene, rays, opts))
+    bar = Progress(f"ray tracing {width}x{height}", rays, unit="ray") if len(parts) > 1 else None
+    try:
+        ts = prepare(scene, impl, **trace_options)
+        origins, directions = _camera_rays(impl, scene.camera, width * k, height * k)
+        colours = []
+        for part_ in parts:   # a long render in bands, so that its bar moves; a short one in one call
+            colours.append(STAGE.call(impl, "W11", ts, origins[part_], directions[part_]))
+            if bar:
+                bar.advance(part_.stop - part_.start)
+    finally:
+        if bar:
+            bar.close()
+    image = np.concatenate(colours).reshape(height, k, width, k, 3).mean(axis=(1, 3))
     return image, dict(ts.counters)
 
 

@@ -29,3 +29,24 @@ def estimate(scene: Scene, size: tuple[int, int] | None, opts: WhittedOptions) -
             costs.append(Cost(where, LIGHT_SAMPLE_BYTES * n, f"{rays:,} camera rays × {n:,} light samples",
                               seconds=rays * n / LIGHT_TESTS_PER_S))
     return costs
+
+
+#: camera rays per second of the reference where no area light multiplies the work (the Whitted scene, 400 × 300:
+#: about 2 million on two cores); halved for a slower laptop
+RAYS_PER_S = 1e6
+#: a render estimated past this many seconds is traced in bands of about BAND_SECONDS each, under a progress bar
+BANDED_SECONDS = 1.0
+BAND_SECONDS = 0.25
+
+
+def trace_seconds(scene: Scene, rays: int, opts: WhittedOptions) -> float:
+    """About how long tracing ``rays`` camera rays takes the reference: each, and its shadow tests."""
+    samples = sum((opts.light_samples or light.samples) for light in scene.lights if isinstance(light, AreaLight))
+    return rays / RAYS_PER_S + rays * samples / LIGHT_TESTS_PER_S
+
+
+def bands(rays: int, seconds: float) -> list[slice]:
+    """The camera rays in bands of about BAND_SECONDS each (one band for a short render), 256 at most."""
+    count = 1 if seconds <= BANDED_SECONDS else min(int(seconds / BAND_SECONDS) + 1, 256, rays)
+    edges = [rays * k // count for k in range(count + 1)]
+    return [slice(a, b) for a, b in zip(edges, edges[1:])]
