@@ -54,10 +54,15 @@ def main(argv: list[str] | None = None) -> int:
     """Run one ``cs451`` command line; returns its exit status (0, 1, 2 or 3: see the module's docstring)."""
     argv = _joined_values(list(sys.argv[1:] if argv is None else argv))
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exit_:   # --help, --version, or a mistake argparse said in one line: its status
+        return exit_.code if isinstance(exit_.code, int) else 2
     verbose, quiet = getattr(args, "verbose", False), getattr(args, "quiet", False)
     if verbose and quiet:   # one on each side of the subcommand: argparse's own check sees only one side
-        parser.error("argument -q/--quiet: not allowed with argument -v/--verbose")
+        print("cs451: error: argument -q/--quiet: not allowed with argument -v/--verbose (see cs451 --help)",
+              file=sys.stderr)
+        return 2
     from .progress import set_quiet, set_verbose
     set_verbose(verbose)
     set_quiet(quiet)

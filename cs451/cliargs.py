@@ -10,13 +10,26 @@ from . import __version__
 from .commands import (cmd_autograder, cmd_bench, cmd_compare, cmd_demo, cmd_figures, cmd_grade, cmd_passed,
                        cmd_release, cmd_render, cmd_scenes, cmd_starter, cmd_warm, slides_commands)
 
-EXIT_CODES = """exit status:
-  0  success (cs451 grade: the grade reaches --fail-under, full marks unless told; a --roster once its
-     gradebook is written; cs451 autograder run once it has written results.json, whatever the grade)
-  1  a grade under --fail-under; a check that found something (starter --check, figures --check,
-     slides check, compare: the images differ, autograder passed: a test of the task failed)
+def exit_codes(student: bool) -> str:
+    """The exit statuses, for ``cs451 --help``: a student's copy has no roster, autograder run or lecturers' checks."""
+    checks = "compare: the images differ, autograder passed: a test of the task failed" if student else \
+        ("starter --check, figures --check,\n     slides check, compare: the images differ, autograder passed: a test of "
+         "the task failed")
+    success = "" if student else ("; a --roster once its\n     gradebook is written; cs451 autograder run once it has "
+                                  "written results.json, whatever the grade")
+    return f"""exit status:
+  0  success (cs451 grade: the grade reaches --fail-under, full marks unless told{success})
+  1  a grade under --fail-under; a check that found something ({checks})
   2  a mistake on the command line or in a file it names (one line says which); interrupted: 130
   3  a bug in the kit (one line; CS451_TRACEBACK=1 shows the whole traceback)"""
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """argparse, with a mistake on the command line said in one line (as every other mistake is), pointing at the
+    subcommand's ``--help`` instead of printing its usage."""
+
+    def error(self, message: str):  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
 def count(minimum: int = 1):
@@ -103,7 +116,7 @@ def _commands() -> argparse.ArgumentParser:
     mine = student_stage()
     stages = [mine] if mine else stage_names()
     what = f"stage {mine}" if mine else "the course's stages"
-    p = argparse.ArgumentParser(prog="cs451", description=f"cs451-kit: render and grade {what}.", epilog=EXIT_CODES,
+    p = OneLineParser(prog="cs451", description=f"cs451-kit: render and grade {what}.", epilog=exit_codes(bool(mine)),
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--version", action="version", version=f"cs451-kit {__version__}")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
