@@ -131,17 +131,16 @@ def size_text(n: float) -> str:
 
 
 def refuse_over_budget(file: str, costs: list[Cost], budget: float | None = None) -> None:
-    """Raise an InputError naming the costliest field when the costs together exceed the budget."""
-    refuse_over_time(file, costs)
+    """Raise an InputError naming the costliest field when the costs together exceed the memory budget, then
+    the time budget (:func:`refuse_over_time`)."""
     budget, why = min(memory_limits()) if budget is None else (budget, "given")
     total = sum(c.bytes for c in costs)
-    if not costs or total <= budget:
-        return
-    worst = max(costs, key=lambda c: c.bytes)
-    raise InputError(file, worst.field, f"asks for {worst.what}: about {size_text(total)} of memory in all, over "
-                     f"this process's budget of {size_text(budget)} ("
-                     + ("set by CS451_MEMORY_BUDGET)" if why == "CS451_MEMORY_BUDGET" else f"{why}; CS451_MEMORY_BUDGET "
-                                                                                          f"sets it)"))
+    if costs and total > budget:
+        worst = max(costs, key=lambda c: c.bytes)
+        source = "set by CS451_MEMORY_BUDGET" if why == "CS451_MEMORY_BUDGET" else f"{why}; CS451_MEMORY_BUDGET sets it"
+        raise InputError(file, worst.field, f"asks for {worst.what}: about {size_text(total)} of memory in all, over "
+                                            f"this process's budget of {size_text(budget)} ({source})")
+    refuse_over_time(file, costs)
 
 
 #: the longest job a scene may ask for without CS451_TIME_BUDGET saying more is meant: 30 minutes

@@ -230,10 +230,8 @@ def build(scene: Any, max_depth: int = 5, min_weight: float = 0.01, light_sample
             light_rows.append((light.position, light.diffuse, light.specular, light.attenuation, (0.0, 0.0, 0.0)))
         elif isinstance(light, AreaLight):
             eu, ev = np.asarray(light.edge_u), np.asarray(light.edge_v)
-            normal = np.cross(eu, ev)
+            normal = np.cross(eu, ev)     # not zero: the scene's AreaLight refused parallel edges
             area = float(np.linalg.norm(normal))
-            if area <= 0:
-                raise KitError(f"{label}: lights[{i}]: edge_u and edge_v are parallel (zero area)")
             normal /= area
             n = light_samples or light.samples
             uv = _stratified(n, seed=1000 + i)
