@@ -99,6 +99,10 @@ class ItemBufferRenderer:
             self.vao_culled = ctx.vertex_array(self.program, attrs, index_buffer=self.indices, index_element_size=4)
             self.centers = quads.mean(axis=1)
             self.radii = np.linalg.norm(quads - self.centers[:, None, :], axis=2).max(axis=1)
+            # the culling test's operands, float32: centres as homogeneous columns, radii padded by rounding
+            self._spheres = np.vstack([self.centers.T, np.ones(len(quads))]).astype(np.float32)
+            reach = float(np.abs(self.centers).max() + self.radii.max())
+            self._padded = (self.radii * (1 + 1e-5) + 1e-5 * reach).astype(np.float32)
         #: triangles drawn and triangles a draw of the whole scene per face would have drawn (culling's saving)
         self.triangles = {"drawn": 0, "scene_per_face": 0}
         if "u_face_base" in self.program:
@@ -136,15 +140,19 @@ class ItemBufferRenderer:
 
     def visible_patches(self, views: np.ndarray, normals: np.ndarray, offsets: np.ndarray) -> np.ndarray:
         """(B·5, n) bool: whether patch j's bounding sphere reaches into face f's clip volume and above its
-        shooter's base plane (n·x > offset). A patch outside one of those half-spaces draws nothing there."""
+        shooter's base plane (n·x > offset). A patch outside one of those half-spaces draws nothing there.
+
+        The six planes of each face are normalised once and tested against every patch in one float32 matrix
+        product (faces·6 × 4 by 4 × n); each sphere is padded by a float32 rounding's worth so that nothing
+        that could draw a pixel is dropped (drawing too much changes no pixel: the clipper discards it)."""
         count = len(views)
         kinds = np.where(np.arange(5) == 0, 0, 1)                                  # top, then four sides
         clip = (self.projections[kinds][None] @ views).reshape(-1, 4, 4)           # world to clip, per face
         w = clip[:, 3:4, :]
         planes = np.concatenate([w + clip[:, :3, :], w - clip[:, :3, :]], axis=1)   # -w <= x, y, z <= w
-        norms = np.maximum(np.linalg.norm(planes[:, :, :3], axis=2), 1e-300)
-        dist = (planes[:, :, :3] @ self.centers.T + planes[:, :, 3:]) / norms[:, :, None]
-        inside = (dist > -self.radii).all(axis=1)
+        planes /= np.maximum(np.linalg.norm(planes[:, :, :3], axis=2, keepdims=True), 1e-300)
+        dist = planes.reshape(-1, 4).astype(np.float32) @ self._spheres         # (faces·6, n)
+        inside = (dist.reshape(len(clip), 6, -1) > -self._padded).all(axis=1)
         above = normals @ self.centers.T - offsets[:, None] > -self.radii            # (B, n)
         return inside & np.repeat(above, 5, axis=0)[: count * 5]
 
