@@ -58,7 +58,7 @@ def split(ref: Any, scene_name: str) -> dict:
     start = time.perf_counter()
     patches = R.make_patches(scene, ref, opts.patch_size)
     subdivide = time.perf_counter() - start
-    engine = R.hemicube_formfactors(patches.quads, opts.resolution, opts.proximity, batch=R.ROWS_PER_BATCH)
+    engine = R.hemicube_formfactors(patches.quads, opts.resolution, opts.proximity, batch=R.ROWS_PER_BATCH_MOST)
     rows = TimedRows(engine)
     sol = R.solve(patches, ref, opts, rows=rows)
     start = time.perf_counter()

@@ -93,6 +93,18 @@ def renderer_name(ctx: Any) -> str:
     return f"{info.get('GL_RENDERER', '?')} / {info.get('GL_VERSION', '?')}"
 
 
+#: GL_RENDERER names of rasterisers that run on the CPU (Mesa's, Google's, Microsoft's, Apple's)
+SOFTWARE_RENDERERS = ("llvmpipe", "softpipe", "swrast", "swiftshader", "software rasterizer", "gdi generic",
+                      "basic render", "apple software renderer")
+
+
+def is_software(ctx: Any) -> bool:
+    """Whether ``ctx`` rasterises on the CPU: there, work kept off the rasteriser pays (culling on the CPU),
+    and a GPU's strengths (thousands of threads, its own memory) are absent."""
+    name = str(ctx.info.get("GL_RENDERER", "")).lower()
+    return any(soft in name for soft in SOFTWARE_RENDERERS)
+
+
 def make_current(ctx: Any) -> None:
     """Make ``ctx`` the current GL context and leave it so.
 

@@ -97,11 +97,15 @@ class RowsAhead:
 
     A hemicube engine draws a batch of hemicubes for the price of little more than one read-back, and the notes'
     sweeps (R3) shoot in the order of exactly these keys, so most rows rendered ahead are used. ``ahead`` extra rows
-    per batch (0: one row at a time); counted: ``rows_ahead`` rendered ahead, ``rows_ahead_unused`` never asked for.
+    per batch (0: one row at a time); ``most`` > ``ahead``: the batch doubles after each one, up to ``most`` extra
+    rows, so a solve that keeps asking for new rows (a large scene shoots nearly every patch) waits on a few large
+    read-backs, not on hundreds of small ones. Counted: ``rows_ahead`` rendered ahead, ``rows_ahead_unused`` never
+    asked for.
     """
 
-    def __init__(self, rows: Any, areas: np.ndarray, emission: np.ndarray, ahead: int):
+    def __init__(self, rows: Any, areas: np.ndarray, emission: np.ndarray, ahead: int, most: int = 0):
         self.source, self.areas, self.ahead = rows, areas, max(0, int(ahead))
+        self.most = max(self.ahead, int(most))
         self.unshot = np.asarray(emission, dtype=np.float64)   # ΔB starts as E
         self.asked: set[int] = set()
         self.rendered_ahead: set[int] = set()
@@ -119,6 +123,7 @@ class RowsAhead:
             likely = list(itertools.islice((int(j) for j in order[key[order] > 0]
                                             if j != i and not self.source.has_row(int(j))), self.ahead))
             self.rendered_ahead.update(likely)
+            self.ahead = min(2 * self.ahead + 1, self.most)
             return self.source.rows([i, *likely])[0]   # row i from the batch: not counted again as a cache hit
         return self.source.row(i)
 
@@ -128,19 +133,21 @@ class RowsAhead:
 
 def solve_progressive(calls: Any, rows: Any, areas: np.ndarray, reflectance: np.ndarray, emission: np.ndarray,
                       tolerance: float = 1e-3, max_shots: int = 0, overshoot: float = 1.0, use_ambient: bool = True,
-                      on_shot: Callable | None = None, rows_ahead: int = 0, known: dict | None = None) -> Solution:
+                      on_shot: Callable | None = None, rows_ahead: int = 0, known: dict | None = None,
+                      rows_ahead_most: int = 0) -> Solution:
     """Run a stage-4 implementation's shooting loop (``calls.progressive``, R3, checked) on rows from
     ``rows.row(i)``, and its ambient term (``calls.ambient``, R4) for the display; counts rows and skipped patches.
 
     ``rows_ahead`` > 0 renders that many likely next shooters' rows with each row not yet rendered
-    (:class:`RowsAhead`; only for a source with ``rows`` and ``has_row``, the hemicube engine). With ``known``
+    (:class:`RowsAhead`; only for a source with ``rows`` and ``has_row``, the hemicube engine), doubling after each
+    batch up to ``rows_ahead_most``. With ``known``
     (patch → row, kept from an earlier solve of the same patches) the implementation's R6 solves instead, asking
     ``rows`` only for the rows it does not know, and adds them to ``known``."""
     validate_system(areas, reflectance, emission)
     n = len(areas)
     max_shots = max_shots or 1000 * n
     fetched: list[int] = []
-    source = RowsAhead(rows, areas, emission, rows_ahead)
+    source = RowsAhead(rows, areas, emission, rows_ahead, rows_ahead_most)
 
     def row(i: Any) -> np.ndarray:
         i = int(i)
@@ -254,7 +261,7 @@ def reciprocal_rows(rows: Any, areas: np.ndarray) -> tuple[MatrixRows, dict[str,
 
 
 def solve(patches: Any, calls: Any, opts: Any, rows: Any, on_shot: Callable | None = None,
-          rows_ahead: int = 0) -> Solution:
+          rows_ahead: int = 0, rows_ahead_most: int = 0) -> Solution:
     """Solve a scene's patches with the solver ``opts.solver`` names, on ``rows`` (the hemicube engine's, say).
 
     With ``opts.reciprocity`` every row is taken first and made reciprocal (:func:`reciprocal_rows`); the solvers,
@@ -262,14 +269,14 @@ def solve(patches: Any, calls: Any, opts: Any, rows: Any, on_shot: Callable | No
     a, rho, E = patches.areas, patches.reflectance, patches.emission
     if getattr(opts, "reciprocity", False):
         corrected, report = reciprocal_rows(rows, a)
-        sol = solve(patches, calls, replace(opts, reciprocity=False), corrected, on_shot, rows_ahead)
+        sol = solve(patches, calls, replace(opts, reciprocity=False), corrected, on_shot, rows_ahead, rows_ahead_most)
         shooting = {k: v for k, v in sol.counters.items() if k not in corrected.counters}
         sol.counters = {**dict(getattr(rows, "counters", {})), **shooting}
         sol.reciprocity = report
         return sol
     if opts.solver == "progressive":
         return solve_progressive(calls, rows, a, rho, E, opts.tolerance, opts.max_shots, opts.overshoot, opts.ambient,
-                                 on_shot, rows_ahead)
+                                 on_shot, rows_ahead, rows_ahead_most=rows_ahead_most)
     F = shooting_matrix(rows.matrix(), a)
     if opts.solver == "direct":
         start = time.perf_counter()

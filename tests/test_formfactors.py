@@ -200,7 +200,8 @@ def test11a_culled_faces_give_the_same_item_buffers_and_rows(ref):
     picks = list(range(0, len(q), 7))
     out = {}
     for cull in (False, True):
-        ff = HemicubeFormFactors(q, calls(ref), resolution=32, batch=8, cull=cull, resample_blind=2)
+        ff = HemicubeFormFactors(q, calls(ref), resolution=32, batch=8, cull=cull, resample_blind=2, trusted=True,
+                                 reduction="stage")
         out[cull] = (*ff.item_buffers(picks), ff.rows(picks), dict(ff.renderer.triangles), dict(ff.counters))
     for k in range(3):
         assert np.array_equal(out[False][k], out[True][k])
@@ -324,3 +325,78 @@ def test16_a_patch_blind_from_its_centre_shoots_from_the_part_that_sees(ref):
     assert np.array_equal(again.rows(open_front), plain.rows(open_front))
     with pytest.raises(KitError, match="resample_blind"):
         HemicubeFormFactors(patches, calls(ref), resample_blind=-1)
+
+
+# --- the trusted engine's own reductions --------------------------------------------
+
+@pytest.mark.parametrize("scene_name", ["cornell-box", "furnace", "glossy-box", "room"])
+def test11c_the_engines_reductions_give_h5s_rows_on_every_built_in_scene(ref, scene_name):
+    """The atlas reduction (CPU) and the device reduction (compute shader) sum what H5 sums, to float64 rounding:
+    the trusted engine's rows are the stage's rows. Drawn culled and unculled, every seventh patch's row."""
+    from cs451.stages import radiosity as R
+    scene = load_scene(scene_name)
+    opts = R.STAGE.options(scene)
+    radiosity = load_impl(resolve_impl("reference", "radiosity"), "radiosity")
+    quads = R.make_patches(scene, radiosity, opts.patch_size).quads
+    picks = list(range(0, len(quads), 7))
+    rows = {}
+    for reduction, cull in (("stage", True), ("atlas", True), ("device", True), ("atlas", False), ("device", False)):
+        ff = HemicubeFormFactors(quads, calls(ref), resolution=32, batch=64, resample_blind=R.RESAMPLE_BLIND,
+                                 proximity="none", trusted=True, reduction=reduction, cull=cull)
+        rows[reduction, cull] = ff.rows(picks)
+        assert ff.reduction == reduction and ff.cull == cull
+    truth = rows["stage", True]
+    assert truth.sum(axis=1).max() > 0.5                       # the rows see something
+    for key, found in rows.items():
+        np.testing.assert_allclose(found, truth, rtol=1e-12, atol=1e-15, err_msg=str(key))
+
+
+def test11d_device_rows_are_the_same_bits_whatever_the_order(ref):
+    """Fixed-point atomics commute: two runs of the device reduction give identical rows; a tile's items beyond n
+    (never drawn by trusted shaders) are ignored rather than written out of bounds."""
+    from cs451.formfactors.device_reduction import DeviceReduction
+    from cs451.gl import create_context
+    ctx = create_context()
+    r, n = 16, 5
+    top, side = calls(ref).tables(r)
+    rng = np.random.default_rng(3)
+    atlas = rng.integers(0, n + 3, size=(3 * r, 2 * r), dtype=np.uint32)       # two tiles; items n+1, n+2 are junk
+    texture = ctx.texture((2 * r, 3 * r), 1, data=atlas.tobytes(), dtype="u4")
+    device = DeviceReduction(ctx, top, side, cols=2, n=n, batch=2)
+    first, second = device.rows(texture, 2, 3 * r), device.rows(texture, 2, 3 * r)
+    assert np.array_equal(first, second)
+    weights = np.concatenate([top, side, side, side, side])
+    for b in range(2):
+        tile = atlas[:, b * r:(b + 1) * r]
+        expected = [weights[tile == j + 1].sum() for j in range(n)]
+        np.testing.assert_allclose(first[b], expected, rtol=1e-13)
+
+
+def test11e_batches_fit_the_memory_budget_and_the_gl_limits(ref):
+    """An atlas takes at most ATLAS_BYTES (two atlases and the read-back) and no side over the GL's own limit."""
+    from types import SimpleNamespace
+
+    from cs451.formfactors.atlas import ATLAS_BYTES, BYTES_PER_PIXEL, atlas_side, one_thread_product
+    q = truth.cube(2)
+    for resolution in (32, 128, 256):
+        ff = HemicubeFormFactors(q, calls(ref), resolution=resolution, batch=10_000, trusted=True)
+        ff.rows([0])
+        w, h = ff.renderer.size
+        assert w * h * BYTES_PER_PIXEL <= ATLAS_BYTES and ff.renderer.batch >= 1
+    small = SimpleNamespace(info={"GL_MAX_TEXTURE_SIZE": 2048, "GL_MAX_VIEWPORT_DIMS": (1024, 4096),
+                                  "GL_MAX_RENDERBUFFER_SIZE": 8192})
+    assert atlas_side(small) == 1024
+    a, b = np.random.default_rng(0).standard_normal((500, 4)), np.random.default_rng(1).standard_normal((4, 3000))
+    np.testing.assert_allclose(one_thread_product(a, b), a @ b, rtol=1e-12, atol=1e-12)
+
+
+def test11f_only_trusted_code_is_culled_or_summed_by_the_engine(ref):
+    q = truth.cube(1)
+    for kwargs in ({"cull": True}, {"reduction": "atlas"}, {"reduction": "device"}):
+        with pytest.raises(KitError, match="trusted"):
+            HemicubeFormFactors(q, calls(ref), resolution=16, **kwargs)
+    with pytest.raises(KitError, match="reduction must be"):
+        HemicubeFormFactors(q, calls(ref), resolution=16, trusted=True, reduction="gpu")
+    plain = HemicubeFormFactors(q, calls(ref), resolution=16)
+    plain.row(0)
+    assert not plain.cull and plain.reduction == "stage"

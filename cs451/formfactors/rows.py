@@ -18,11 +18,15 @@ import numpy as np
 
 from ..errors import KitError
 from ..patches import as_quads, patch_areas, patch_centers, patch_normals
-from .atlas import ItemBufferRenderer
+from .atlas import ItemBufferRenderer, one_thread_product
+from .device_reduction import DeviceReduction, supports_device_reduction
+from .reduction import AtlasReduction
 from .calls import StageCalls
 from .geometry import _sub_quads, default_near_far, hemicube_up
 from .proximity import fix_row
 
+REDUCTIONS = ("stage", "atlas", "device")
+BATCHES_AT_ONCE = 8      # batches whose rows are summed in one go (pipelined): their dense rows are in memory together
 BLIND_ROW_SUM = 0.05  # a row summing to less sees (almost) nothing: with resample_blind, look again from over the patch
 
 
@@ -45,24 +49,39 @@ class HemicubeFormFactors:
     whose centre lies under a box resting on it (a floor patch straddling a block's footprint)
     is lit on its exposed part, and that part must shoot its light; from the centre alone the
     light would vanish. ``cull`` draws each hemicube face with only the patches that can land in it
-    (:class:`~.atlas.ItemBufferRenderer`): the same rows, for trusted shaders only.
+    (:class:`~.atlas.ItemBufferRenderer`): the same rows, for trusted shaders only. ``reduction`` "stage"
+    sums each hemicube with the stage's H5 (``calls.row``: a submission's rows are its own); "atlas" sums a
+    whole batch where it was read back (:class:`~.reduction.AtlasReduction`): the same rows to float64 rounding,
+    without a copy or a call per hemicube, for the trusted engine.
 
     ``counters``: hemicubes_rendered (k² per row with a split shooter), rows_computed,
     rows_cached_hits (rows asked for again), patches_culled (summed over rows: patches wholly
     in or behind the shooter's plane, which the base-plane clip discards), patches_backfacing
     (in front of the plane but facing away: drawn, they hide what is behind them, receive 0),
     proximity_pairs (close pairs the contour fix replaced), blind_rows_resampled, readbacks (one per batch).
-    ``seconds``: render (draw and read back), sum (H5), proximity (the fix).
+    ``seconds``: render (draw and read back; the renderer's own ``seconds`` split them), sum (H5 or the atlas
+    reduction), proximity (the fix).
     """
 
     def __init__(self, quads: Any, calls: StageCalls, resolution: int = 128, near: float | None = None, rotate: bool = True,
                  seed: int = 0, proximity: str = "contour", batch: int = 256, proximity_distance: float = 2.0,
-                 shooter_split: int = 1, resample_blind: int = 0, ctx: Any = None, cull: bool = False):
+                 shooter_split: int = 1, resample_blind: int = 0, ctx: Any = None, cull: bool | None = None,
+                 reduction: str | None = None, trusted: bool = False):
         self.quads = as_quads(quads)
         if len(self.quads) == 0:
             raise KitError("no patches")
         if int(resolution) != resolution or resolution < 2 or resolution % 2:
             raise KitError(f"hemicube resolution must be an even integer >= 2, got {resolution}")
+        if reduction not in (None, *REDUCTIONS):
+            raise KitError(f"reduction must be one of {', '.join(REDUCTIONS)}, got {reduction!r}")
+        if (cull or reduction not in (None, "stage")) and not trusted:
+            raise KitError("culling and the engine's own reductions are for trusted stage-3 code only (trusted=True)")
+        self.trusted = bool(trusted)
+        self._cull_request, self._reduction_request = cull, reduction
+        #: decided with the GL context (:attr:`renderer`): whether faces are culled, and how rows are summed
+        self.cull: bool | None = None
+        self.reduction: str | None = None
+        self._reducer: Any = None                       # the atlas reduction, made (and compiled) at first use
         if proximity not in ("contour", "none"):
             raise KitError(f"proximity must be 'contour' or 'none', got {proximity!r}")
         self.calls = calls
@@ -86,7 +105,6 @@ class HemicubeFormFactors:
             raise KitError(f"near plane must lie in (0, {self.far:g}), got {self.near}")
         self._batch_request = max(1, min(int(batch), self.n))   # no bigger an atlas than the scene needs
         self._ctx = ctx
-        self.cull = bool(cull)
         self._renderer: ItemBufferRenderer | None = None
         self._tables: tuple[np.ndarray, np.ndarray] | None = None
         self._rows: dict[int, np.ndarray] = {}
@@ -105,9 +123,20 @@ class HemicubeFormFactors:
     @property
     def renderer(self) -> ItemBufferRenderer:
         if self._renderer is None:
+            from ..gl import create_context, is_software
+            ctx = self._ctx or create_context()
+            software = is_software(ctx)
+            # trusted code, by default: on a CPU rasteriser, cull (each face draws only what can land in it) and
+            # sum on the CPU; on a GPU, one instanced draw of everything and the sums on the device
+            cull = self._cull_request if self._cull_request is not None else self.trusted and software
+            reduction = self._reduction_request or ("stage" if not self.trusted else "atlas" if software
+                                                    or not supports_device_reduction(ctx) else "device")
+            if reduction == "device" and not supports_device_reduction(ctx):
+                raise KitError(f"the device reduction needs OpenGL 4.3; this context is {ctx.version_code}")
+            self.cull, self.reduction = bool(cull), reduction
             projections = self.calls.projections(self.near, self.far)
             self._renderer = ItemBufferRenderer(self.quads, self.calls.shaders(), self.resolution, projections,
-                                                self._batch_request, self._ctx, cull=self.cull)
+                                                self._batch_request, ctx, cull=self.cull)
         return self._renderer
 
     # -- rows --------------------------------------------------------------------
@@ -128,9 +157,9 @@ class HemicubeFormFactors:
         missing = list(dict.fromkeys(i for i in idx if i not in self._rows))
         self.counters["rows_cached_hits"] += len(idx) - len(missing)
         if missing:
-            step = self.renderer.batch
-            for start in range(0, len(missing), step):
-                self._compute(missing[start:start + step])
+            group = BATCHES_AT_ONCE * self.renderer.batch     # drawn while the last batch is summed; bounded memory
+            for start in range(0, len(missing), group):
+                self._compute(missing[start:start + group])
         out = np.zeros((len(idx), self.n))
         for k, i in enumerate(idx):
             out[k] = self._rows[i]
@@ -210,20 +239,58 @@ class HemicubeFormFactors:
         rows = np.zeros((count, self.n))
         top_w, side_w = self.tables
         step = self.renderer.batch
-        for start in range(0, len(jobs), step):
-            chunk = jobs[start:start + step]
+        chunks = [jobs[start:start + step] for start in range(0, len(jobs), step)]
+        if self.reduction != "stage":
+            self._sum_atlases(chunks, rows)
+            return rows
+        for chunk in chunks:
             t0 = time.perf_counter()
-            views = np.stack([self._views(eye, n, index) for _, eye, n, _, index, _ in chunk])
-            planes = np.array([[*n, d] for _, _, n, d, _, _ in chunk])
-            buffers = self.renderer.render(views, planes)     # the base plane from the geometry, not from H2
+            buffers = self.renderer.render(*self._batch_views(chunk))
             t1 = time.perf_counter()
-            self.counters["readbacks"] += 1
-            self.counters["hemicubes_rendered"] += len(chunk)
             for (k, _, _, _, _, w), (top, sides) in zip(chunk, buffers):
                 rows[k] += w * self.calls.row(top, sides, top_w, side_w, self.n)
-            self.seconds["render"] += t1 - t0
-            self.seconds["sum"] += time.perf_counter() - t1
+            self._count_batch(chunk, t1 - t0, time.perf_counter() - t1)
         return rows
+
+    def _batch_views(self, chunk: list) -> tuple[np.ndarray, np.ndarray]:
+        """The views (B, 5, 4, 4) and base planes (B, 4) of a batch of jobs."""
+        views = np.stack([self._views(eye, n, index) for _, eye, n, _, index, _ in chunk])
+        return views, np.array([[*n, d] for _, _, n, d, _, _ in chunk])  # the base plane from the geometry, not H2
+
+    def _count_batch(self, chunk: list, render: float, total: float) -> None:
+        """Count a batch's hemicubes and read-back, and its seconds drawing and reading back, and summing."""
+        self.counters["readbacks"] += 1
+        self.counters["hemicubes_rendered"] += len(chunk)
+        self.seconds["render"] += render
+        self.seconds["sum"] += total
+
+    def _sum_atlases(self, chunks: list, rows: np.ndarray) -> None:
+        """The engine's own reduction (``atlas`` or ``device``), pipelined: batch k + 1 is drawn while batch k is summed."""
+        renderer = self.renderer
+        if self._reducer is None:
+            if self.reduction == "device":
+                self._reducer = DeviceReduction(renderer.ctx, *self.tables, renderer.cols, self.n, renderer.batch)
+            else:
+                self._reducer = AtlasReduction(*self.tables, renderer.cols, self.n)
+        pending = None
+        for chunk in [*chunks, None]:
+            t0 = time.perf_counter()
+            ticket = renderer.submit(*self._batch_views(chunk)) if chunk is not None else None
+            self.seconds["render"] += time.perf_counter() - t0
+            if pending is not None:
+                done, (slot, height) = pending
+                t1 = time.perf_counter()
+                if self.reduction == "device":                 # the wait for the draw counts as summing here
+                    t2 = t1
+                    found = self._reducer.rows(renderer.texture((slot, height)), len(done), height)
+                else:
+                    atlas = renderer.collect((slot, height))
+                    t2 = time.perf_counter()
+                    found = self._reducer.rows(atlas, len(done))
+                for (k, _, _, _, _, w), row in zip(done, found):
+                    rows[k] += w * row
+                self._count_batch(done, t2 - t1, time.perf_counter() - t2)
+            pending = (chunk, ticket) if chunk is not None else None
 
     def _compute(self, batch: list[int]) -> None:
         jobs = [(k, p, self.normals[i], float(self.normals[i] @ self.centers[i]), i, w)
@@ -264,14 +331,17 @@ class HemicubeFormFactors:
 
     def _count_culled(self, batch: list[int]) -> None:
         """Count, for the shooters ``batch``, the patches wholly behind their planes and those facing away."""
-        b = np.asarray(batch)
-        n_c = np.einsum("bd,bd->b", self.normals[b], self.centers[b])                      # (B,)
-        top = (self.quads @ self.normals[b].T).max(axis=1).T - n_c[:, None]              # (B, n): highest corner
-        behind = top <= 1e-9 * np.maximum(self.radii[b], 1e-300)[:, None]
-        behind[np.arange(len(b)), b] = False                                             # not the shooter itself
-        self.counters["patches_culled"] += int(behind.sum())
-        facing_away = np.einsum("bjd,jd->bj", self.centers[None, :, :] - self.centers[b][:, None, :], self.normals) >= 0
-        self.counters["patches_backfacing"] += int((facing_away & ~behind).sum())
+        corners = self.quads.reshape(-1, 3)
+        own = np.einsum("jd,jd->j", self.centers, self.normals)                              # n_j · c_j
+        for start in range(0, len(batch), 256):                                             # (256, n) at a time
+            b = np.asarray(batch[start:start + 256])
+            n_c = np.einsum("bd,bd->b", self.normals[b], self.centers[b])                  # (B,)
+            top = one_thread_product(corners, self.normals[b].T).reshape(self.n, 4, -1).max(axis=1).T - n_c[:, None]
+            behind = top <= 1e-9 * np.maximum(self.radii[b], 1e-300)[:, None]            # (B, n): highest corner
+            behind[np.arange(len(b)), b] = False                                         # not the shooter itself
+            self.counters["patches_culled"] += int(behind.sum())
+            facing_away = own - one_thread_product(self.centers[b], self.normals.T) >= 0    # (c_j - c_b) · n_j >= 0
+            self.counters["patches_backfacing"] += int((facing_away & ~behind).sum())
 
     def _proximity_fix(self, i: int, row: np.ndarray, stands: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
         """Row i corrected for the shooter's extent (:mod:`.proximity`), measured from ``stands`` (points, weights):
