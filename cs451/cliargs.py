@@ -245,9 +245,11 @@ def _commands() -> argparse.ArgumentParser:
     rl.set_defaults(func=cmd_release)
 
     b = sub.add_parser("bench", help="time-against-error benchmarks", description="Run a stage's benchmark; prints a table and writes JSON.")
-    b.add_argument("stage", choices=stages + ["formfactors", "autograder", "tolerance", "fair_share", "mutation"],
+    b.add_argument("stage", choices=stages + ["formfactors", "walkthrough", "autograder", "tolerance", "fair_share",
+                                              "mutation"],
                    help="a stage; 'formfactors' (hemicubes per second of the form-factor engine, and where its time "
-                        "goes, on this machine's GL); 'autograder' (grading time and memory per stage, against Gradescope's limits); "
+                        "goes, on this machine's GL); 'walkthrough' (30 views of the Cornell box: one radiosity solve "
+                        "against Mitsuba 3 per view); 'autograder' (grading time and memory per stage, against Gradescope's limits); "
                         "'mutation' (mistakes planted in the reference's task regions: which the tests catch); "
                         "'tolerance' (image tests' spread across rasterisers and thread counts); 'fair_share' (an "
                         "honest student's roster grading beside a CPU burner, with and without the CPU share)")

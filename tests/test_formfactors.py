@@ -400,3 +400,33 @@ def test11f_only_trusted_code_is_culled_or_summed_by_the_engine(ref):
     plain = HemicubeFormFactors(q, calls(ref), resolution=16)
     plain.row(0)
     assert not plain.cull and plain.reduction == "stage"
+
+
+def test11g_the_formfactors_bench_splits_its_time_and_compares_with_h5():
+    """``cs451 bench formfactors``' measurement on a small case: the split adds up, and the rows are H5's."""
+    from bench.formfactors import one_matrix, patches_of
+    from cs451.gl import create_context
+    ctx = create_context()
+    quads, proximity = patches_of("cornell-box")
+    stage, F_stage = one_matrix(quads, proximity, 16, False, "stage", ctx)
+    atlas, F_atlas = one_matrix(quads, proximity, 16, True, "atlas", ctx)
+    for row in (stage, atlas):
+        parts = row["draw"] + row["readback"] + row["reduction"] + row["other"]
+        assert parts == pytest.approx(row["seconds"], rel=1e-6) and row["hemicubes"] >= len(quads)
+    assert atlas["triangles_per_face"] < 0.5 * stage["triangles_per_face"]          # culling draws less
+    np.testing.assert_allclose(F_atlas, F_stage, rtol=1e-12, atol=1e-15)
+
+
+def test11h_the_walkthrough_stays_where_both_renderers_agree_on_what_is_seen():
+    """Its views keep the eye between the side walls' planes and before the opening (a wall seen from behind is
+    black to Mitsuba's one-sided material), and a render compared with itself has no error on any wall."""
+    from bench.walkthrough import views, wall_errors
+    from bench.radiosity import polygon_ids
+    for camera in views(30):
+        eye = dict(camera)["eye"]
+        assert 0 < eye[0] < 556 and 0 < eye[1] < 548 and eye[2] < 0
+    scene = load_scene("cornell-box")
+    ids = polygon_ids(scene, (64, 64))
+    image = np.random.default_rng(0).uniform(0.1, 1.0, (64, 64, 3))
+    errors = wall_errors(image, image, ids)
+    assert errors and all(e == 0 for e in errors.values())
