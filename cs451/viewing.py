@@ -14,6 +14,21 @@ from typing import Any, Callable
 import numpy as np
 
 
+def import_in_background() -> None:
+    """Start importing pyrender (1.1 s here: trimesh and scipy come with it) on a thread, for a job that draws with
+    :func:`camera_projection` only at its end and has GL work to do first, which releases the GIL."""
+    import sys
+    import threading
+
+    def load() -> None:
+        try:
+            __import__("cs451.pyrender_shim")
+        except Exception:   # noqa: BLE001 - whatever failed fails again, with its message, where the projection is made
+            pass
+    if "cs451.pyrender_shim" not in sys.modules:
+        threading.Thread(target=load, name="cs451-import-pyrender", daemon=True).start()
+
+
 def camera_projection(camera: Any, width: int, height: int) -> np.ndarray:
     """Eye to clip space for ``camera`` (fovy, near, far) at this window size, from pyrender."""
     from .pyrender_shim import pyrender

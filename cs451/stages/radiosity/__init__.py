@@ -21,7 +21,7 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from ... import drawing, patching, solvers
+from ... import drawing, patching, solvers, viewing
 from ... import specular as glossy       # the module; `specular` is also an option below
 from ...patching import Patches
 from ...errors import KitError
@@ -179,14 +179,13 @@ def hemicube_formfactors(quads: np.ndarray, resolution: int = 128, proximity: st
                          batch: int = 256, seed: int = 0) -> Any:
     """Stage 3's hemicube engine over the stage-3 implementation this copy has (lazy, cached rows).
 
-    That is the reference in the kit (see :func:`cs451.impl.earlier_stage_impl`). Pass the GL context
-    you draw with as ``ctx`` when you draw while rows are still being computed (the demo): the engine
-    makes its own context current for each batch and leaves it so. ``batch`` hemicubes share a
-    read-back: 1 suits rows asked for one at a time (shooting), the default suits whole matrices.
-    ``seed`` picks the hemicubes' random rotations (another seed: an independent estimate of F).
-    The kit's reference stage-3 code is trusted: on a CPU rasteriser each face draws only the patches that can land
-    in it (culling assumes the reference's shaders), and rows are summed a batch at a time, on the device where it
-    has compute shaders, not by H5 per hemicube. A student's own stage-3 package is drawn unculled and summed by its H5.
+    That is the reference in the kit (see :func:`cs451.impl.earlier_stage_impl`). Pass the GL context you draw with
+    as ``ctx`` when you draw while rows are still being computed (the demo): the engine makes its own context current
+    for each batch and leaves it so. ``batch`` hemicubes (at most) share a read-back. ``seed`` picks the hemicubes'
+    random rotations (another seed: an independent estimate of F). The kit's reference stage-3 code is trusted: on
+    a CPU rasteriser each face draws only the patches that can land in it (culling assumes the reference's shaders),
+    and rows are summed a batch at a time (on the device where it has compute shaders), not by H5 per hemicube.
+    A student's own stage-3 package is drawn unculled and summed by its H5.
     """
     from ...formfactors import HemicubeFormFactors
     from ...impl import KIT_ROOT, earlier_stage_impl
@@ -231,6 +230,7 @@ def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, quiet: 
     and shows the shooting's progress toward the tolerance.
     """
     from ...progress import quiet as quiet_line, verbose, warn
+    viewing.import_in_background()          # pyrender (the display's projection) loads while form factors are drawn
     opts = STAGE.options(scene, **overrides)
     patches = make_patches(scene, impl, opts.patch_size)
     gloss = glossy.highlight(scene, patches, opts.specular_samples) if opts.specular else None  # refused before solving
