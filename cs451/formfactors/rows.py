@@ -141,8 +141,15 @@ class HemicubeFormFactors:
 
     # -- rows --------------------------------------------------------------------
     def row(self, i: int) -> np.ndarray:
-        """Row F_i· (n,): computed on first request, then cached."""
-        return self.rows([i])[0]
+        """Row F_i· (n,): computed on first request, then cached; a read-only view of the cache (a shooting loop
+        asks for rows thousands of times: no copy each time)."""
+        cached = self._rows.get(int(i)) if isinstance(i, (int, np.integer)) else None
+        if cached is None:
+            return self.rows([i])[0]
+        self.counters["rows_cached_hits"] += 1
+        view = cached.view()
+        view.flags.writeable = False
+        return view
 
     def has_row(self, i: int) -> bool:
         """Whether row i is rendered already (asking for it costs nothing)."""
