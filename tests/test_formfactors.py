@@ -402,6 +402,19 @@ def test11f_only_trusted_code_is_culled_or_summed_by_the_engine(ref):
     assert not plain.cull and plain.reduction == "stage"
 
 
+def test11i_a_driver_that_cannot_build_the_compute_shader_gets_the_same_rows_from_the_cpu(ref, monkeypatch, capsys):
+    import cs451.formfactors.rows as rows_module
+
+    def refuse(*args, **kwargs):
+        raise RuntimeError("GLSL Compiler failed\ncompute_shader ...")
+    q = truth.cube(1)
+    expected = HemicubeFormFactors(q, calls(ref), resolution=16, trusted=True, reduction="atlas").rows([0, 3])
+    monkeypatch.setattr(rows_module, "DeviceReduction", refuse)
+    ff = HemicubeFormFactors(q, calls(ref), resolution=16, trusted=True, reduction="device")
+    np.testing.assert_array_equal(ff.rows([0, 3]), expected)
+    assert ff.reduction == "atlas" and "compute shader failed (GLSL Compiler failed)" in capsys.readouterr().err
+
+
 def test11g_the_formfactors_bench_splits_its_time_and_compares_with_h5():
     """``cs451 bench formfactors``' measurement on a small case: the split adds up, and the rows are H5's."""
     from bench.formfactors import one_matrix, patches_of

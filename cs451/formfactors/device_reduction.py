@@ -30,9 +30,9 @@ uniform int u_run;
 uniform int u_height;
 
 void add(uint b, uint item, double s) {
-    double units = s * 4611686018427387904.0;                          // 2^62
-    double high = floor(units / 4294967296.0);
-    uint low = uint(units - high * 4294967296.0);
+    double units = s * 4611686018427387904.0lf;                        // 2^62
+    double high = floor(units / 4294967296.0lf);
+    uint low = uint(units - high * 4294967296.0lf);
     uint at = 2u * (b * uint(u_n) + item - 1u);
     uint before = atomicAdd(rows[at], low);
     atomicAdd(rows[at + 1u], uint(high) + (before + low < before ? 1u : 0u));   // the carry out of the low word

@@ -274,11 +274,16 @@ class HemicubeFormFactors:
     def _sum_atlases(self, chunks: list, rows: np.ndarray) -> None:
         """The engine's own reduction (``atlas`` or ``device``), pipelined: batch k + 1 is drawn while batch k is summed."""
         renderer = self.renderer
-        if self._reducer is None:
-            if self.reduction == "device":
+        if self._reducer is None and self.reduction == "device":
+            try:
                 self._reducer = DeviceReduction(renderer.ctx, *self.tables, renderer.cols, self.n, renderer.batch)
-            else:
-                self._reducer = AtlasReduction(*self.tables, renderer.cols, self.n)
+            except Exception as err:       # noqa: BLE001 - a driver that will not build it: the same rows on the CPU
+                from ..progress import warn
+                warn(f"form factors: the GPU's compute shader failed ({str(err).strip().splitlines()[0]}); "
+                     f"summing rows on the CPU instead")
+                self.reduction = "atlas"
+        if self._reducer is None:
+            self._reducer = AtlasReduction(*self.tables, renderer.cols, self.n)
         pending = None
         for chunk in [*chunks, None]:
             t0 = time.perf_counter()
