@@ -28,10 +28,8 @@ class AtlasReduction:
         top, side = np.asarray(top, dtype=np.float64), np.asarray(side, dtype=np.float64)
         tile = np.concatenate([top, side, side, side, side])               # (3r, r): one hemicube's weights
         self.r, self.cols, self.n = top.shape[1], int(cols), int(n)
-        self.weights = np.tile(tile, (1, self.cols))                        # (3r, cols·r): a row of tiles
-        running = np.cumsum(tile, axis=1)                                   # along each row of a tile
-        self.before = np.tile(running - tile, (1, self.cols))               # the sum left of each pixel, in its tile
-        self.through = np.tile(running, (1, self.cols))                     # ... and up to it, included
+        # (3r, cols·r), a row of tiles: the weights' running sum along each tile row, up to each pixel included
+        self.through = np.tile(np.cumsum(tile, axis=1), (1, self.cols))
 
     def rows(self, atlas: np.ndarray, count: int) -> np.ndarray:
         """Rows (count, n), float64, of the first ``count`` tiles of ``atlas`` ((tile rows · 3r, cols · r), uint32)."""
@@ -48,7 +46,9 @@ class AtlasReduction:
             last[:-1] = first[1:] - 1                                       # a run ends where the next begins
             last[-1] = band.size - 1
             width = k * r
-            sums = self.through[:, :width].ravel()[last] - self.before[:, :width].ravel()[first]
+            through = self.through if k == self.cols else np.ascontiguousarray(self.through[:, :width])
+            through = through.ravel()
+            sums = through[last] - np.where(first % r == 0, 0.0, through[first - 1])   # a run's own weights
             keys = (first % width) // r * n1 + band.ravel()[first]
             out[start:start + k] = np.bincount(keys, weights=sums, minlength=k * n1).reshape(k, n1)[:, 1:]
         return out
