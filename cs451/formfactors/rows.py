@@ -51,8 +51,10 @@ class HemicubeFormFactors:
     light would vanish. ``cull`` draws each hemicube face with only the patches that can land in it
     (:class:`~.atlas.ItemBufferRenderer`): the same rows, for trusted shaders only. ``reduction`` "stage"
     sums each hemicube with the stage's H5 (``calls.row``: a submission's rows are its own); "atlas" sums a
-    whole batch where it was read back (:class:`~.reduction.AtlasReduction`): the same rows to float64 rounding,
-    without a copy or a call per hemicube, for the trusted engine.
+    whole batch where it was read back (:class:`~.reduction.AtlasReduction`), "device" on the GPU with a compute
+    shader (:class:`~.device_reduction.DeviceReduction`): H5's rows to float64 rounding, without a copy or a call
+    per hemicube. Both, and culling, need ``trusted`` (the kit's own stage-3 code); left as None they are chosen
+    with the GL context: on a CPU rasteriser culled and "atlas", on a GPU unculled and "device" (4.3 and up).
 
     ``counters``: hemicubes_rendered (k² per row with a split shooter), rows_computed,
     rows_cached_hits (rows asked for again), patches_culled (summed over rows: patches wholly
@@ -81,7 +83,7 @@ class HemicubeFormFactors:
         #: decided with the GL context (:attr:`renderer`): whether faces are culled, and how rows are summed
         self.cull: bool | None = None
         self.reduction: str | None = None
-        self._reducer: Any = None                       # the atlas reduction, made (and compiled) at first use
+        self._reducer: Any = None                       # the engine's reduction, made at first use
         if proximity not in ("contour", "none"):
             raise KitError(f"proximity must be 'contour' or 'none', got {proximity!r}")
         self.calls = calls
