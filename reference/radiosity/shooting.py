@@ -27,7 +27,7 @@ def shoot(i: int, row: np.ndarray, areas: np.ndarray, reflectance: np.ndarray,
     """
     # BEGIN SOLUTION R2: ΔRad_j = ρ_j ΔB_i F_ij A_i / A_j into B and ΔB, then ΔB_i = 0 (handout §R2)
     delta = unshot[i].copy()
-    received = (row * (areas[i] / areas))[:, None] * delta   # F_ij A_i / A_j · ΔB_i, per channel (n, 3)
+    received = np.outer(row * (areas[i] / areas), delta)    # F_ij A_i / A_j · ΔB_i, per channel
     received *= reflectance
     radiosity += received                    # in place: a solve shoots thousands of times
     unshot += received
