@@ -74,8 +74,9 @@ MAX_ATLAS = 4096      # pixels on a side of the item-buffer atlas, at most
 #: bytes an atlas pixel costs: two atlases (R32UI items and 32-bit depth: one drawn while the other is summed),
 #: and the read-back buffer
 BYTES_PER_PIXEL = 2 * (4 + 4) + 4
-#: what the atlases may take in all: a batch has as many hemicubes as fit (51 at resolution 128, 12 at 256).
-#: Batches of 256 at 128 drew the room's matrix no faster and took 500 MB more (llvmpipe's atlases are host memory)
+#: what the atlases may take in all, before the batch is rounded up to whole rows of tiles: 51 hemicubes fit at
+#: resolution 128 and the grid of 32 columns makes it 64 (63 MB); 12 at 256 (48 MB). Batches of 256 at 128 drew
+#: the room's matrix no faster and took 500 MB more (llvmpipe's atlases are host memory)
 ATLAS_BYTES = 48 << 20
 FLUSH_FACES = 40      # faces binned before a software rasteriser is handed them (8 hemicubes, 40,000 triangles)
 BLAS_ONE_THREAD = 1 << 18   # OpenBLAS runs a product of fewer multiply-adds (m·n·k) on the calling thread
