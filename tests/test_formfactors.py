@@ -443,3 +443,15 @@ def test11h_the_walkthrough_stays_where_both_renderers_agree_on_what_is_seen():
     image = np.random.default_rng(0).uniform(0.1, 1.0, (64, 64, 3))
     errors = wall_errors(image, image, ids)
     assert errors and all(e == 0 for e in errors.values())
+
+
+def test11j_a_walls_mask_drops_the_crease_between_two_of_its_faces():
+    """A block's faces are eroded one by one: the pixels along the crease between a lit top and a dark side are
+    in neither face's mask, so a renderer whose edge falls one pixel over is not charged the top's brightness."""
+    from bench.radiosity import WALLS, wall_masks
+    top, side = WALLS["short block"][:2]
+    ids = np.full((20, 20), -1)
+    ids[2:10, 2:18], ids[10:18, 2:18] = top, side                  # two faces of one wall meet at row 10
+    mask = wall_masks(ids)["short block"]
+    assert mask[4:8, 4:16].all() and mask[12:16, 4:16].all()       # each face's inside is kept
+    assert not mask[8:12].any()                                    # the crease, two pixels either side, is not
