@@ -132,3 +132,28 @@ def test05_cornell_rows_at_the_stage_defaults_match_the_area_average(calls, embr
     row = HemicubeFormFactors(cornell, calls, resolution=128, rotate=False, proximity="contour").row(patch)
     assert np.abs(row - expected).max() < 0.01, (name, np.round(row - expected, 4))
     assert row.sum() == pytest.approx(expected.sum(), rel=0.01), name
+
+
+@pytest.mark.parametrize("far", [False, True], ids=["close (H6 over the shooter)", "in between (the kernel)"])
+def test06_a_receiver_edge_on_from_the_hemicube_is_never_seen_more_than_wholly(calls, far):
+    """A receiver whose plane passes a hair under the shooter's centre: the centre reaches it by ~1e-10, so
+    one cell's reading of it (rasterised edge-on) over that reach is no fraction seen. The Cornell box's
+    tall block has such a face (centre at y = 165, the short block's top): its entry was 5e9 and the solve
+    diverged. The entry must stay within the unoccluded area average, which half the shooter sees."""
+    shooter = np.array([[0, -0.5, 0], [0, 0.5, 0], [1, 0.5, 0], [1, -0.5, 0]], float)      # x = 0..1, y = ±0.5
+    z0 = 2.5 if far else 0.4
+    receiver = np.array([[0, -1e-9, z0], [0, -1e-9, z0 + 1], [1, -1e-9, z0 + 1], [1, -1e-9, z0]], float)
+    quads = np.stack([shooter, receiver])
+    normals = patch_normals(quads)
+    if normals[0] @ [0, 0, 1] < 0:
+        quads[0] = quads[0][::-1]
+    if normals[1] @ [0, 1, 0] < 0:
+        quads[1] = quads[1][::-1]
+    ff = HemicubeFormFactors(quads, calls, resolution=64, proximity="contour")
+    assert ff.normals[0] @ [0, 0, 1] > 0.99 and ff.normals[1] @ [0, 1, 0] > 0.99
+    one_cell = float(ff.tables[0].max())
+    unoccluded = ff.proximity_fixed(0, np.array([0.0, 1.0]))[1] if not far else None
+    fixed = ff.proximity_fixed(0, np.array([0.0, one_cell]))[1]
+    assert 0 < fixed < 0.5
+    if unoccluded is not None:
+        assert fixed <= unoccluded * (1 + 1e-12)

@@ -19,7 +19,8 @@ Which receivers, and how (chosen by the estimated error, not by a fixed distance
   point-to-polygon form factor, integrated over the shooter by a graded composite Gauss rule, finer toward j
   (near a shared edge F(p) changes on the scale of the distance to the edge, which a fixed 5 × 5 rule missed
   by 20% for a 5 × 1 floor beside a 1 × 0.2 wall; :mod:`.shooter_quadrature`). Visibility: where nothing can
-  stand between i and j (:func:`~.visibility.occluders`), the hemicube's own fraction of j seen, as above;
+  stand between i and j (:func:`~.visibility.occluders`), the hemicube's own fraction of j seen, as above
+  (at most all of it where j is too nearly edge-on from the hemicubes' points for a cell to measure);
   where something can, the fraction each quadrature point sees, by sight lines to a grid on j
   (:class:`~.visibility.Sightlines`), the shooter refined where they disagree. Carrying the centre's view over
   the whole shooter was wrong under occlusion: the Cornell box's floor (one polygon, partly under the blocks)
@@ -27,7 +28,8 @@ Which receivers, and how (chosen by the estimated error, not by a fixed distance
   matrix within 0.006 of ray casting from random points (tests/test_proximity_occlusion.py);
 * in between: the ratio above from a cheap quadrature of the form-factor integral itself (cos·cos/πr²
   between Gauss points of both patches, the kit's own and not H6), applied where it moves the entry by more
-  than ``PROXIMITY_ERROR`` (unit squares 0.2 wide five apart: +1.4% before).
+  than ``PROXIMITY_ERROR`` (unit squares 0.2 wide five apart: +1.4% before). Where the hemicubes' points reach
+  j by less than one cell can read, the corrected entry is at most the unoccluded quadrature (``fix_row``).
 """
 from __future__ import annotations
 
@@ -78,9 +80,12 @@ def kernel(points: np.ndarray, normal: np.ndarray, weights: np.ndarray, receiver
 
 def fix_row(calls: Any, quads: np.ndarray, normals: np.ndarray, centers: np.ndarray, radii: np.ndarray, i: int,
             row: np.ndarray, stands: tuple[np.ndarray, np.ndarray], proximity_distance: float,
-            counters: dict[str, int]) -> np.ndarray:
+            counters: dict[str, int], cell: float) -> np.ndarray:
     """Row ``row`` of patch i, measured from the points ``stands`` = (points, weights summing to 1), with each
-    entry corrected as the module says. Counts ``proximity_pairs`` (H6), ``proximity_kernel_pairs``,
+    entry corrected as the module says. ``cell``: the largest delta form factor of one hemicube cell, the least
+    the row can tell. Where the points reach a receiver by less than that, the ratio of what the row read to
+    what they reach is not a fraction seen, and is capped at 1: a block's face whose centre lay in the plane of
+    the other block's top (reached by 1e-18) once read one cell of it, and the entry became 5e9. Counts ``proximity_pairs`` (H6), ``proximity_kernel_pairs``,
     ``proximity_evaluations`` (H6 calls), ``proximity_occluded_pairs`` (close pairs with something between)
     and ``proximity_rays`` (their sight lines)."""
     c, n, r_i = centers[i], normals[i], radii[i]
@@ -100,7 +105,10 @@ def fix_row(calls: Any, quads: np.ndarray, normals: np.ndarray, centers: np.ndar
         ok = measured > 0
         ratio = np.where(ok, true / np.where(ok, measured, 1.0), 1.0)
         moved = ok & (np.abs(ratio - 1.0) > PROXIMITY_ERROR)
-        out[J[moved]] = row[J[moved]] * ratio[moved]
+        fixed = row[J] * ratio
+        faint = measured <= cell              # below what a cell can tell: the fraction seen is at most 1
+        fixed[faint] = np.minimum(fixed[faint], true[faint])
+        out[J[moved]] = fixed[moved]
         counters["proximity_kernel_pairs"] = counters.get("proximity_kernel_pairs", 0) + int(moved.sum())
     area = float(patch_areas(quads[i:i + 1])[0])
     size = float(np.ptp(quads.reshape(-1, 3), axis=0).max())
@@ -116,6 +124,9 @@ def fix_row(calls: Any, quads: np.ndarray, normals: np.ndarray, centers: np.ndar
             if reach > 1e-12 and row[j] <= 0.0:
                 continue                       # seen from where the hemicubes stood, and hidden: stays 0
             scale = row[j] / reach if reach > 1e-12 else 1.0
+            if reach <= cell:
+                scale = min(scale, 1.0)        # (nearly) edge-on from where they stood: a cell's reading is
+                #                                rasterisation, not a fraction seen, and no fraction is over 1
             if abs(scale - 1.0) <= VISIBLE_SNAP:
                 scale = 1.0                    # within what its cells can tell from wholly visible
         else:

@@ -361,7 +361,8 @@ class HemicubeFormFactors:
         """Row i corrected for the shooter's extent (:mod:`.proximity`), measured from ``stands`` (points, weights):
         by default where its hemicubes stand (:meth:`shooter_points`)."""
         return fix_row(self.calls, self.quads, self.normals, self.centers, self.radii, i, row,
-                       self.shooter_points(i) if stands is None else stands, self.proximity_distance, self.counters)
+                       self.shooter_points(i) if stands is None else stands, self.proximity_distance, self.counters,
+                       float(self.tables[0].max()))
 
     # -- checks reported for every run ----------------------------------------------
     def report(self) -> dict[str, Any]:
