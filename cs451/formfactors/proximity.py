@@ -85,9 +85,10 @@ def fix_row(calls: Any, quads: np.ndarray, normals: np.ndarray, centers: np.ndar
     entry corrected as the module says. ``cell``: the largest delta form factor of one hemicube cell, the least
     the row can tell. Where the points reach a receiver by less than that, the ratio of what the row read to
     what they reach is not a fraction seen, and is capped at 1: a block's face whose centre lay in the plane of
-    the other block's top (reached by 1e-18) once read one cell of it, and the entry became 5e9. Counts ``proximity_pairs`` (H6), ``proximity_kernel_pairs``,
-    ``proximity_evaluations`` (H6 calls), ``proximity_occluded_pairs`` (close pairs with something between)
-    and ``proximity_rays`` (their sight lines)."""
+    the other block's top (reached by 1e-18) once read one cell of it, and the entry became 5e9.
+
+    Counts ``proximity_pairs`` (H6), ``proximity_kernel_pairs``, ``proximity_evaluations`` (H6 calls),
+    ``proximity_occluded_pairs`` (close pairs with something between) and ``proximity_rays`` (their sight lines)."""
     c, n, r_i = centers[i], normals[i], radii[i]
     points, weights = stands
     gap = np.linalg.norm(centers - c, axis=1) - radii
