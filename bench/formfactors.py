@@ -5,8 +5,10 @@ radiosity scenes is drawn by each way the engine can run, side by side in one pr
 the rounds. The split: drawing (culling on the CPU, the draw calls), reading the atlas back (with any wait for a
 software rasteriser still drawing), summing the rows (H5 per hemicube, the atlas reduction on the CPU, or the
 device reduction, which includes the wait for the GPU), and the rest (views, the proximity fix, blind patches).
-Every configuration's matrix is compared with H5's sums of the same item buffers: the largest difference is
-printed (float64 rounding when the hemicubes land in the same tiles, as they do here).
+Every configuration's matrix is compared with H5's, drawn patch by patch: the largest difference is printed
+(float64 rounding when the hemicubes land in the same tiles, as they do here; with grids, a few cells' delta form
+factors where a pixel on a patch edge went to the neighbour, which tests/test_formfactor_grids.py shows costs
+nothing in accuracy against a finer hemicube).
 """
 from __future__ import annotations
 
@@ -24,13 +26,16 @@ from cs451.scene import load_scene
 from cs451.stages import hemicube as H
 from cs451.stages import radiosity as R
 
-#: (label, cull, reduction): the first is the stage's own way (H5 per hemicube, every face drawn whole), the
-#: student's path; the others are the trusted engine's choices
-CONFIGS = (("H5 per hemicube, unculled", False, "stage"),
-           ("atlas reduction, culled", True, "atlas"),
-           ("atlas reduction, unculled", False, "atlas"),
-           ("device reduction, culled", True, "device"),
-           ("device reduction, unculled", False, "device"))
+#: (label, cull, reduction, grids): the first is the stage's own way (H5 per hemicube, every face drawn whole,
+#: patch by patch), the student's path; the others are the trusted engine's choices. Grids (a polygon's patches
+#: drawn as one quad, cs451/formfactors/grids.py) differ from H5's rows on patch-edge pixels only
+CONFIGS = (("H5 per hemicube, unculled", False, "stage", False),
+           ("atlas reduction, culled", True, "atlas", False),
+           ("atlas reduction, unculled", False, "atlas", False),
+           ("device reduction, culled", True, "device", False),
+           ("device reduction, unculled", False, "device", False),
+           ("grids, atlas reduction, culled", True, "atlas", True),
+           ("grids, device reduction, unculled", False, "device", True))
 
 
 def patches_of(scene_name: str) -> tuple[np.ndarray, str]:
@@ -41,12 +46,13 @@ def patches_of(scene_name: str) -> tuple[np.ndarray, str]:
     return R.make_patches(scene, radiosity, opts.patch_size).quads, opts.proximity
 
 
-def one_matrix(quads: np.ndarray, proximity: str, resolution: int, cull: bool, reduction: str,
+def one_matrix(quads: np.ndarray, proximity: str, resolution: int, cull: bool, reduction: str, grids: bool,
                ctx: Any) -> tuple[dict, np.ndarray]:
     """The full matrix by one configuration, with its time split (seconds) and hemicubes per second."""
     calls = H.calls(load_impl(resolve_impl("reference", "hemicube"), "hemicube"))
     ff = HemicubeFormFactors(quads, calls, resolution=resolution, proximity=proximity, batch=256,
-                             resample_blind=R.RESAMPLE_BLIND, trusted=True, cull=cull, reduction=reduction, ctx=ctx)
+                             resample_blind=R.RESAMPLE_BLIND, trusted=True, cull=cull, reduction=reduction, grids=grids,
+                             ctx=ctx)
     ff.renderer                                         # the atlas and its programs: not part of the timing
     start = time.perf_counter()
     F = ff.matrix()
@@ -77,8 +83,8 @@ def main(output: Path, quick: bool = False) -> None:
         best: dict[str, dict] = {}
         truth = None
         for _ in range(rounds):
-            for label, cull, reduction in CONFIGS:
-                row, F = one_matrix(quads, proximity, resolution, cull, reduction, ctx)
+            for label, cull, reduction, grids in CONFIGS:
+                row, F = one_matrix(quads, proximity, resolution, cull, reduction, grids, ctx)
                 if label not in best or row["seconds"] < best[label]["seconds"]:
                     best[label] = row
                 if reduction == "stage":
@@ -88,18 +94,18 @@ def main(output: Path, quick: bool = False) -> None:
                     best[label].setdefault("max_difference_from_h5", row["max_difference_from_h5"])
         base = best[CONFIGS[0][0]]["hemicubes_per_second"]
         print(f"{scene_name}, {len(quads)} patches, resolution {resolution}: the full matrix")
-        print(f"{'configuration':28s} {'hemicubes/s':>11s} {'× H5':>6s} {'s':>6s} {'draw':>6s} {'read':>6s} "
+        print(f"{'configuration':34s} {'hemicubes/s':>11s} {'× H5':>6s} {'s':>6s} {'draw':>6s} {'read':>6s} "
               f"{'reduce':>6s} {'other':>6s} {'batch':>5s} {'tris/face':>9s} {'max |ΔF|':>9s}")
-        for label, _, _ in CONFIGS:
+        for label, *_ in CONFIGS:
             r = best[label]
             diff = r.get("max_difference_from_h5")
-            print(f"{label:28s} {r['hemicubes_per_second']:11.0f} {r['hemicubes_per_second'] / base:6.2f} "
+            print(f"{label:34s} {r['hemicubes_per_second']:11.0f} {r['hemicubes_per_second'] / base:6.2f} "
                   f"{r['seconds']:6.2f} {r['draw']:6.2f} {r['readback']:6.2f} {r['reduction']:6.2f} {r['other']:6.2f} "
                   f"{r['batch']:5d} {r['triangles_per_face']:9.0f} {'—' if diff is None else f'{diff:9.1e}':>9s}")
             results.append({"scene": scene_name, "resolution": resolution, "patches": len(quads),
                             "configuration": label, **r})
         print()
-    chosen = "atlas reduction, culled" if software else "device reduction, unculled"
+    chosen = "grids, atlas reduction, culled" if software else "device reduction, unculled"
     print(f"The engine's choice on this device: {chosen} (radiosity's reference, benches and slides).")
     (output / "formfactors.json").write_text(json.dumps({"device": device, "software": software, "rounds": rounds,
                                                          "results": results}, indent=1))

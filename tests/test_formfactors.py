@@ -332,23 +332,25 @@ def test16_a_patch_blind_from_its_centre_shoots_from_the_part_that_sees(ref):
 @pytest.mark.parametrize("scene_name", ["cornell-box", "furnace", "glossy-box", "room"])
 def test11c_the_engines_reductions_give_h5s_rows_on_every_built_in_scene(ref, scene_name):
     """The atlas reduction (CPU) and the device reduction (compute shader) sum what H5 sums, to float64 rounding:
-    the trusted engine's rows are the stage's rows. Drawn culled and unculled, every seventh patch's row."""
+    the trusted engine's rows are the stage's rows. Drawn culled and unculled, every seventh patch's row, patch by
+    patch and as grids (which draw other pixels on patch edges: tests/test_formfactor_grids.py)."""
     from cs451.stages import radiosity as R
     scene = load_scene(scene_name)
     opts = R.STAGE.options(scene)
     radiosity = load_impl(resolve_impl("reference", "radiosity"), "radiosity")
     quads = R.make_patches(scene, radiosity, opts.patch_size).quads
     picks = list(range(0, len(quads), 7))
-    rows = {}
-    for reduction, cull in (("stage", True), ("atlas", True), ("device", True), ("atlas", False), ("device", False)):
-        ff = HemicubeFormFactors(quads, calls(ref), resolution=32, batch=64, resample_blind=R.RESAMPLE_BLIND,
-                                 proximity="none", trusted=True, reduction=reduction, cull=cull)
-        rows[reduction, cull] = ff.rows(picks)
-        assert ff.reduction == reduction and ff.cull == cull
-    truth = rows["stage", True]
-    assert truth.sum(axis=1).max() > 0.5                       # the rows see something
-    for key, found in rows.items():
-        np.testing.assert_allclose(found, truth, rtol=1e-12, atol=1e-15, err_msg=str(key))
+    for grids in (False, True):
+        rows = {}
+        for reduction, cull in (("stage", True), ("atlas", True), ("device", True), ("atlas", False), ("device", False)):
+            ff = HemicubeFormFactors(quads, calls(ref), resolution=32, batch=64, resample_blind=R.RESAMPLE_BLIND,
+                                     proximity="none", trusted=True, reduction=reduction, cull=cull, grids=grids)
+            rows[reduction, cull] = ff.rows(picks)
+            assert ff.reduction == reduction and ff.cull == cull and ff.grids == grids
+        truth = rows["stage", True]
+        assert truth.sum(axis=1).max() > 0.5                       # the rows see something
+        for key, found in rows.items():
+            np.testing.assert_allclose(found, truth, rtol=1e-12, atol=1e-15, err_msg=str((grids, *key)))
 
 
 def test11d_device_rows_are_the_same_bits_whatever_the_order(ref):

@@ -27,7 +27,8 @@ where nothing can stand between, else by sight lines (:mod:`.visibility`). With
 ``shooter_split=k`` each row averages k × k hemicubes spread over the shooter.
 
 One module a job: :mod:`.calls` (what the engine asks of a stage-3 implementation),
-:mod:`.geometry` (where hemicubes stand), :mod:`.atlas` (the instanced draw and read-back),
+:mod:`.geometry` (where hemicubes stand), :mod:`.atlas` (the instanced draw and read-back), :mod:`.grids`
+(a polygon's patches drawn as one quad, for the trusted engine on a CPU rasteriser),
 :mod:`.rows` (rows, caching, the proximity fix, checks), :mod:`.pictures` (for people),
 :mod:`.raycast` (Monte Carlo on Embree, for comparison), :mod:`.reciprocity` (computed rows made
 reciprocal, A_i F_ij = A_j F_ji, each row keeping its sum: stage 4's ``reciprocity`` option).

@@ -22,6 +22,7 @@ from .atlas import ItemBufferRenderer, one_thread_product
 from .device_reduction import DeviceReduction, supports_device_reduction
 from .reduction import AtlasReduction
 from .calls import StageCalls
+from .grids import patch_grids
 from .geometry import _sub_quads, default_near_far, hemicube_up
 from .proximity import fix_row
 
@@ -53,8 +54,10 @@ class HemicubeFormFactors:
     sums each hemicube with the stage's H5 (``calls.row``: a submission's rows are its own); "atlas" sums a
     whole batch where it was read back (:class:`~.reduction.AtlasReduction`), "device" on the GPU with a compute
     shader (:class:`~.device_reduction.DeviceReduction`): H5's rows to float64 rounding, without a copy or a call
-    per hemicube. Both, and culling, need ``trusted`` (the kit's own stage-3 code); left as None they are chosen
-    with the GL context: on a CPU rasteriser culled and "atlas", on a GPU unculled and "device" (4.3 and up).
+    per hemicube. ``grids`` draws each polygon's grid of patches as one quad whose fragments find their patch
+    (:mod:`.grids`): the rows of the same hemicubes but for pixels on patch edges, at a fraction of the triangles.
+    All three need ``trusted`` (the kit's own stage-3 code); left as None they are chosen with the GL context: on
+    a CPU rasteriser culled, grids and "atlas"; on a GPU unculled, patch by patch and "device" (4.3 and up).
 
     ``counters``: hemicubes_rendered (k² per row with a split shooter), rows_computed,
     rows_cached_hits (rows asked for again), patches_culled (summed over rows: patches wholly
@@ -68,7 +71,7 @@ class HemicubeFormFactors:
     def __init__(self, quads: Any, calls: StageCalls, resolution: int = 128, near: float | None = None, rotate: bool = True,
                  seed: int = 0, proximity: str = "contour", batch: int = 256, proximity_distance: float = 2.0,
                  shooter_split: int = 1, resample_blind: int = 0, ctx: Any = None, cull: bool | None = None,
-                 reduction: str | None = None, trusted: bool = False):
+                 reduction: str | None = None, trusted: bool = False, grids: bool | None = None):
         self.quads = as_quads(quads)
         if len(self.quads) == 0:
             raise KitError("no patches")
@@ -76,12 +79,13 @@ class HemicubeFormFactors:
             raise KitError(f"hemicube resolution must be an even integer >= 2, got {resolution}")
         if reduction not in (None, *REDUCTIONS):
             raise KitError(f"reduction must be one of {', '.join(REDUCTIONS)}, got {reduction!r}")
-        if (cull or reduction not in (None, "stage")) and not trusted:
-            raise KitError("culling and the engine's own reductions are for trusted stage-3 code only (trusted=True)")
+        if (cull or grids or reduction not in (None, "stage")) and not trusted:
+            raise KitError("culling, grids and the engine's own reductions are for trusted stage-3 code only (trusted=True)")
         self.trusted = bool(trusted)
-        self._cull_request, self._reduction_request = cull, reduction
+        self._cull_request, self._reduction_request, self._grids_request = cull, reduction, grids
         #: decided with the GL context (:attr:`renderer`): whether faces are culled, and how rows are summed
         self.cull: bool | None = None
+        self.grids: bool | None = None
         self.reduction: str | None = None
         self._reducer: Any = None                       # the engine's reduction, made at first use
         if proximity not in ("contour", "none"):
@@ -135,10 +139,12 @@ class HemicubeFormFactors:
                                                     or not supports_device_reduction(ctx) else "device")
             if reduction == "device" and not supports_device_reduction(ctx):
                 raise KitError(f"the device reduction needs OpenGL 4.3; this context is {ctx.version_code}")
-            self.cull, self.reduction = bool(cull), reduction
+            grids = self._grids_request if self._grids_request is not None else self.trusted and software
+            self.cull, self.reduction, self.grids = bool(cull), reduction, bool(grids)
             projections = self.calls.projections(self.near, self.far)
             self._renderer = ItemBufferRenderer(self.quads, self.calls.shaders(), self.resolution, projections,
-                                                self._batch_request, ctx, cull=self.cull)
+                                                self._batch_request, ctx, cull=self.cull,
+                                                grids=patch_grids(self.quads) if self.grids else None)
         return self._renderer
 
     # -- rows --------------------------------------------------------------------

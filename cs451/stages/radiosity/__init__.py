@@ -183,9 +183,9 @@ def hemicube_formfactors(quads: np.ndarray, resolution: int = 128, proximity: st
     as ``ctx`` when you draw while rows are still being computed (the demo): the engine makes its own context current
     for each batch and leaves it so. ``batch`` hemicubes (at most) share a read-back. ``seed`` picks the hemicubes'
     random rotations (another seed: an independent estimate of F). The kit's reference stage-3 code is trusted: on
-    a CPU rasteriser each face draws only the patches that can land in it (culling assumes the reference's shaders),
-    and rows are summed a batch at a time (on the device where it has compute shaders), not by H5 per hemicube.
-    A student's own stage-3 package is drawn unculled and summed by its H5.
+    a CPU rasteriser each face draws only the patches that can land in it, a polygon's patches as one quad
+    (:mod:`cs451.formfactors.grids`), and rows are summed a batch at a time (on the device where it has compute
+    shaders), not by H5 per hemicube. A student's own stage-3 package is drawn unculled and summed by its H5.
     """
     from ...formfactors import HemicubeFormFactors
     from ...impl import KIT_ROOT, earlier_stage_impl
