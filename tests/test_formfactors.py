@@ -423,13 +423,16 @@ def test11g_the_formfactors_bench_splits_its_time_and_compares_with_h5():
     from cs451.gl import create_context
     ctx = create_context()
     quads, proximity = patches_of("cornell-box")
-    stage, F_stage = one_matrix(quads, proximity, 16, False, "stage", ctx)
-    atlas, F_atlas = one_matrix(quads, proximity, 16, True, "atlas", ctx)
-    for row in (stage, atlas):
+    stage, F_stage = one_matrix(quads, proximity, 16, False, "stage", False, ctx)
+    atlas, F_atlas = one_matrix(quads, proximity, 16, True, "atlas", False, ctx)
+    grids, F_grids = one_matrix(quads, proximity, 16, True, "atlas", True, ctx)
+    for row in (stage, atlas, grids):
         parts = row["draw"] + row["readback"] + row["reduction"] + row["other"]
         assert parts == pytest.approx(row["seconds"], rel=1e-6) and row["hemicubes"] >= len(quads)
     assert atlas["triangles_per_face"] < 0.5 * stage["triangles_per_face"]          # culling draws less
+    assert grids["triangles_per_face"] < 0.5 * atlas["triangles_per_face"]          # and grids less again
     np.testing.assert_allclose(F_atlas, F_stage, rtol=1e-12, atol=1e-15)
+    assert 0 < np.abs(F_grids - F_stage).max() < 0.05                               # edge pixels only
 
 
 def test11h_the_walkthrough_stays_where_both_renderers_agree_on_what_is_seen():
