@@ -128,7 +128,7 @@ class ItemBufferRenderer:
         vbo = ctx.buffer((corners - self.origin).astype("f4").tobytes())
         attrs = [(vbo, "3f", "in_position")] if "in_position" in self.program else []
         if grids is not None:
-            attrs += _grid_attributes(ctx, grids)
+            attrs += _grid_attributes(ctx, self.program, grids)
         elif "in_id" in self.program:
             attrs.append((ctx.buffer(np.repeat(np.arange(n), 4).astype("u4").tobytes()), "u", "in_id"))
         if not attrs:
@@ -352,14 +352,16 @@ def patch_indices(patches: np.ndarray) -> np.ndarray:
     return (4 * np.asarray(patches, dtype=np.uint32)[:, None] + CORNER_INDICES).ravel()
 
 
-def _grid_attributes(ctx: Any, grids: Grids) -> list:
-    """The grid shaders' inputs besides the positions, four vertices a grid (:data:`.grids.GRID_VERTEX`)."""
+def _grid_attributes(ctx: Any, program: Any, grids: Grids) -> list:
+    """The grid shaders' inputs besides the positions, four vertices a grid (:data:`.grids.GRID_VERTEX`): a buffer
+    each, for those the linked program kept."""
     plane = grids.plane_coordinates()                                                 # (g, 4, 2)
-    flat = np.repeat(plane[:, 1:].reshape(len(grids), 1, 6), 4, axis=1)               # corners 1-3, at every vertex
-    floats = np.concatenate([plane, flat], axis=2).astype("f4")                      # (g, 4, 8)
-    ints = np.repeat(np.column_stack([grids.first, grids.shape])[:, None, :], 4, axis=1).astype("u4")
-    return [(ctx.buffer(floats.tobytes()), "2f 2f 2f 2f", "in_local", "in_b", "in_c", "in_d"),
-            (ctx.buffer(ints.tobytes()), "3u", "in_grid")]
+    at_every_vertex = lambda values: np.repeat(values[:, None], 4, axis=1)            # noqa: E731
+    inputs = {"in_local": (plane.astype("f4"), "2f"),
+              **{name: (at_every_vertex(plane[:, k]).astype("f4"), "2f") for k, name in ((1, "in_b"), (2, "in_c"), (3, "in_d"))},
+              "in_grid": (at_every_vertex(np.column_stack([grids.first, grids.shape])).astype("u4"), "3u")}
+    return [(ctx.buffer(np.ascontiguousarray(values).tobytes()), layout, name)
+            for name, (values, layout) in inputs.items() if name in program]
 
 
 def atlas_side(ctx: Any) -> int:
