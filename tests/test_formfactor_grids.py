@@ -11,7 +11,8 @@ import pytest
 
 from cs451.errors import KitError
 from cs451.formfactors import HemicubeFormFactors
-from cs451.formfactors.grids import bilinear, patch_grids
+from cs451.formfactors.geometry import bilinear
+from cs451.formfactors.grids import patch_grids
 from cs451.impl import load_impl, resolve_impl
 from cs451.scene import load_scene
 from cs451.stages import hemicube as H

@@ -113,7 +113,6 @@ class ItemBufferRenderer:
             if "#version" in src:
                 raise KitError(f"H4 item_buffer_shaders(): the {name} shader must not have a #version line (the kit adds it)")
         self.cull = bool(cull)
-        self.grids = grids
         front = VERTEX_INTERFACE + "#define main item_main\n"
         # culling draws each face on its own: the face's data are uniforms, not texels fetched per vertex
         self.program = compile_program(ctx, "H4" if grids is None else "the kit's grid shaders",

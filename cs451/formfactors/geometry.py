@@ -58,12 +58,17 @@ def hemicube_inputs(quads: np.ndarray, calls: StageCalls, patch: int, rotate: bo
     return views, calls.projections(near, far), near, far
 
 
+def bilinear(quad: np.ndarray, st: np.ndarray) -> np.ndarray:
+    """Points (..., 3) at bilinear coordinates st (..., 2) of quad (4, 3): corner 0 at (0, 0), 1 at (1, 0), 2 at (1, 1),
+    3 at (0, 1), as stage 4's R1 places its patches' corners."""
+    s, t = st[..., :1], st[..., 1:]
+    return (1 - s) * (1 - t) * quad[0] + s * (1 - t) * quad[1] + s * t * quad[2] + (1 - s) * t * quad[3]
+
+
 def _sub_quads(quad: np.ndarray, k: int) -> np.ndarray:
     """The k × k bilinear cells of one quad, (k², 4, 3): where a split shooter's hemicubes stand."""
     t = np.linspace(0.0, 1.0, k + 1)
-    s_, t_ = (g[:, :, None] for g in np.meshgrid(t, t, indexing="ij"))
-    a, b, c, d = quad
-    grid = (1 - s_) * (1 - t_) * a + s_ * (1 - t_) * b + s_ * t_ * c + (1 - s_) * t_ * d      # (k+1, k+1, 3)
+    grid = bilinear(quad, np.stack(np.meshgrid(t, t, indexing="ij"), axis=-1))                # (k+1, k+1, 3)
     return np.stack([grid[:-1, :-1], grid[1:, :-1], grid[1:, 1:], grid[:-1, 1:]], axis=2).reshape(-1, 4, 3)
 
 

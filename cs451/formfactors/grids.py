@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..patches import as_quads
+from .geometry import bilinear
 
 #: a patch's corner is on its grid when within this fraction of the scene's size (float64 rounding of a
 #: bilinear subdivision is about 1e-16 of it; float32, which the GPU draws in, 6e-8)
@@ -101,12 +102,6 @@ class Grids:
         return np.stack([np.einsum("gki,gi->gk", edge, x), np.einsum("gki,gi->gk", edge, y)], axis=2)
 
 
-def bilinear(quad: np.ndarray, st: np.ndarray) -> np.ndarray:
-    """Points (..., 3) at bilinear coordinates st (..., 2) of quad (4, 3), as stage 4's R1 places grid corners."""
-    s, t = st[..., :1], st[..., 1:]
-    return (1 - s) * (1 - t) * quad[0] + s * (1 - t) * quad[1] + s * t * quad[2] + (1 - s) * t * quad[3]
-
-
 def patch_grids(quads: np.ndarray, tolerance: float = GRID_TOLERANCE) -> Grids:
     """The patches in runs that are bilinear grids of planar convex quads, row by row; a patch that starts no
     such run is a grid of one cell. Every patch lands in exactly one grid, in order: the grids' cells are the patches."""
@@ -142,8 +137,7 @@ def patch_grids(quads: np.ndarray, tolerance: float = GRID_TOLERANCE) -> Grids:
                 mid = (good + bad) // 2
                 good, bad = (mid, bad) if _is_grid(q[a:a + nu * mid], nu, mid, eps) else (good, mid)
             nv = good
-        cells = q[a:a + nu * nv]
-        corners.append(np.array([cells[0, 0], cells[nu - 1, 1], cells[-1, 2], cells[-nu, 3]]))
+        corners.append(_spanned(q[a:a + nu * nv], nu))
         first.append(a)
         shape.append((nu, nv))
         a += nu * nv
@@ -155,7 +149,7 @@ def _is_grid(cells: np.ndarray, nu: int, nv: int, eps: float) -> bool:
     """Whether ``cells`` (nu·nv, 4, 3), row-major, are the bilinear grid of the planar convex quad they span."""
     if nu * nv == 1:
         return True
-    quad = np.array([cells[0, 0], cells[nu - 1, 1], cells[-1, 2], cells[-nu, 3]])
+    quad = _spanned(cells, nu)
     edges = np.roll(quad, -1, axis=0) - quad
     turns = np.cross(edges, np.roll(edges, -1, axis=0))             # at corners 1, 2, 3, 0
     normal = turns.sum(axis=0)
@@ -167,3 +161,8 @@ def _is_grid(cells: np.ndarray, nu: int, nv: int, eps: float) -> bool:
     i, j = np.meshgrid(np.arange(nu), np.arange(nv))
     st = (np.stack([i.ravel(), j.ravel()], axis=1)[:, None, :] + _CELL_CORNERS[None]) / np.array([nu, nv])
     return bool(np.abs(bilinear(quad, st) - cells).max() <= eps)
+
+
+def _spanned(cells: np.ndarray, nu: int) -> np.ndarray:
+    """The quad (4, 3) that row-major cells (nu per row) span: the outer corners of the corner cells."""
+    return np.array([cells[0, 0], cells[nu - 1, 1], cells[-1, 2], cells[-nu, 3]])
