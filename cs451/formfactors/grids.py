@@ -103,8 +103,9 @@ class Grids:
 
 
 def patch_grids(quads: np.ndarray, tolerance: float = GRID_TOLERANCE) -> Grids:
-    """The patches in runs that are bilinear grids of planar convex quads, row by row; a patch that starts no
-    such run is a grid of one cell. Every patch lands in exactly one grid, in order: the grids' cells are the patches."""
+    """The patches in runs that are bilinear grids of planar convex quads, row by row; the patches of a row that is
+    no such grid are grids of one cell each. Every patch lands in exactly one grid, in order: the grids' cells are
+    the patches."""
     q = as_quads(quads)
     n = len(q)
     eps = tolerance * max(float(np.ptp(q.reshape(-1, 3), axis=0).max()), 1e-300)
@@ -112,26 +113,29 @@ def patch_grids(quads: np.ndarray, tolerance: float = GRID_TOLERANCE) -> Grids:
     def near(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         return np.abs(a - b).max(axis=-1) <= eps
 
-    # patch b + 1 is patch b's right neighbour: it shares b's edge 1-2 as its edge 0-3
+    # patch b + 1 is patch b's right neighbour: it shares b's edge 1-2 as its edge 0-3; chain[b] patches from b on
+    # make a row (b's first break at or after it, the last of the row)
     right = near(q[1:, 0], q[:-1, 1]) & near(q[1:, 3], q[:-1, 2])
+    breaks = np.where(np.append(right, False), n, np.arange(n))
+    chain = np.minimum.accumulate(breaks[::-1])[::-1] - np.arange(n) + 1
     corners, first, shape = [], [], []
     a = 0
     while a < n:
-        nu = 1
-        while a + nu < n and right[a + nu - 1]:
-            nu += 1
-        nv = 1
+        nu, nv = int(chain[a]), 1
+        if not _is_grid(q[a:a + nu], nu, 1, eps):      # not even the first row: its patches are drawn on their own
+            corners += list(q[a:a + nu])
+            first += range(a, a + nu)
+            shape += [(1, 1)] * nu
+            a += nu
+            continue
         while a + (nv + 1) * nu <= n:          # the next row: chained, and on top of this one
             row, below = q[a + nv * nu:a + (nv + 1) * nu], q[a + (nv - 1) * nu:a + nv * nu]
-            if not ((nu == 1 or right[a + nv * nu:a + (nv + 1) * nu - 1].all()) and near(row[:, 0], below[:, 3]).all()
-                    and near(row[:, 1], below[:, 2]).all()):
+            if not (chain[a + nv * nu] >= nu and near(row[:, 0], below[:, 3]).all() and near(row[:, 1], below[:, 2]).all()):
                 break
             nv += 1
         # the most rows that are a grid (a run can run on into the next polygon's rows): the first k rows of a
         # grid are a grid (of the quad they span), so the largest k is found by bisection
-        if not _is_grid(q[a:a + nu], nu, 1, eps):
-            nu = nv = 1                        # not even the first row: its first patch is drawn on its own
-        elif not _is_grid(q[a:a + nu * nv], nu, nv, eps):
+        if not _is_grid(q[a:a + nu * nv], nu, nv, eps):
             good, bad = 1, nv
             while bad - good > 1:
                 mid = (good + bad) // 2
