@@ -62,9 +62,9 @@ echo "setup: done; the kit's command is .venv/bin/cs451 (or activate: source .ve
 
 # The main job (a student's release stops above this line; cs451/packaging/release.py)
 # What the kit's own tests use beyond the main job, so that none of them skips on a machine set up here:
-#   libglu1-mesa                  GLU, for stage 1's fixed-function truth (tests/fixed_function.py)
+#   libglu1-mesa                  GLU, for stage 1's fixed-function truth (tests/sphere/fixed_function.py)
 #   xvfb, xauth, x11-utils        a virtual display for the demo windows' tests
-#   gcc, libc6-dev, freeglut3-dev the course notes' own C program, stage 1's oracle (tests/test_notes_program.py)
+#   gcc, libc6-dev, freeglut3-dev the course notes' own C program, stage 1's oracle (tests/sphere/test_notes_program.py)
 #   chromium                      the lecture decks opened offline (tests/test_slides.py)
 #   git                           the kit's own files as committed (tests/test_architecture.py, the seats)
 apt_install libglu1-mesa xvfb xauth x11-utils gcc libc6-dev freeglut3-dev chromium git

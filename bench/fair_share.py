@@ -23,6 +23,9 @@ from pathlib import Path
 
 from cs451 import KIT_ROOT
 
+#: The top-level keys of fair_share.json that the docs and decks read (tests/test_benches.py checks a quick run writes them).
+KEYS = ("tasks", "spinners", "cpus", "rounds", "median_ratio_share", "median_ratio_no_share")
+
 TASKS = ["S1", "S2", "S3", "S4"]
 SPINNERS = 8
 #: At import, in every test the burner runs: children in sessions of their own spin until the test ends (the

@@ -30,6 +30,9 @@ from pathlib import Path
 
 from cs451 import KIT_ROOT
 
+#: The keys of each row of mutation.json that the docs read (tests/test_benches.py checks a quick run writes them).
+KEYS = ("stage", "mutants", "killed", "errors")
+
 REGION = re.compile(r"#\s*BEGIN SOLUTION\s+([A-Z]\d+)?")
 SWAPS = {ast.Lt: "<=", ast.LtE: "<", ast.Gt: ">=", ast.GtE: ">", ast.Eq: "!=", ast.NotEq: "==",
          ast.Add: "-", ast.Sub: "+", ast.Mult: "/", ast.Div: "*", ast.And: "or", ast.Or: "and",

@@ -14,17 +14,21 @@ __version__ = "0.1.0"
 ENGINE_DIR = Path(__file__).resolve().parent
 #: Engine folders only instructors use (the slides' builder, its vendored reveal.js and KaTeX): never in a student
 #: release or a grading sandbox, and not part of the answers' version. Within a stage's package, its deck figures
-#: (``stages/<stage>/figures.py``, ``figure_*.py``) and its speed layer (``stages/<stage>/accel/``: compiled code
-#: that does tasks' work) are instructors' too: see :func:`instructor_only`.
+#: (``stages/<stage>/figures.py``, ``figure_*.py``), its benchmarks (``bench.py``, ``bench_*.py``: their solvers
+#: would answer tasks) and its speed layer (``stages/<stage>/accel/``: compiled code that does tasks' work) are
+#: instructors' too: see :func:`instructor_only`.
 INSTRUCTOR_ONLY = ("slides",)
 #: A stage's own folder of compiled speed-ups for its reference (one declared hook: ``Stage.accelerator``).
 SPEED_LAYER = "accel"
+#: A stage's files only instructors use: its deck figures and its benchmarks (by name, and by prefix for their parts).
+INSTRUCTOR_FILES = ("figures.py", "bench.py")
+INSTRUCTOR_PREFIXES = ("figure_", "bench_")
 
 
 def instructor_only(path: Path) -> bool:
     """Whether a file or folder of the engine is only for instructors (the slides and every stage's deck figures,
-    which draw from the reference; a stage's speed layer, which would answer its tasks): left out of releases,
-    sandboxes and the answers' version."""
+    which draw from the reference; a stage's benchmarks and speed layer, which would answer its tasks): left out of
+    releases, sandboxes and the answers' version."""
     try:
         parts = path.resolve().relative_to(ENGINE_DIR).parts
     except ValueError:
@@ -33,7 +37,8 @@ def instructor_only(path: Path) -> bool:
         return True
     if len(parts) >= 3 and parts[0] == "stages" and parts[2] == SPEED_LAYER:
         return True
-    return len(parts) == 3 and parts[0] == "stages" and (parts[2] == "figures.py" or parts[2].startswith("figure_"))
+    return len(parts) == 3 and parts[0] == "stages" and (parts[2] in INSTRUCTOR_FILES
+                                                         or parts[2].startswith(INSTRUCTOR_PREFIXES))
 
 
 def _kit_root() -> Path:

@@ -244,15 +244,15 @@ def _commands() -> argparse.ArgumentParser:
                     help="also ship this earlier stage's reference (one the stage builds on), after its deadline")
     rl.set_defaults(func=cmd_release)
 
-    b = sub.add_parser("bench", help="time-against-error benchmarks", description="Run a stage's benchmark; prints a table and writes JSON.")
-    b.add_argument("stage", choices=stages + ["formfactors", "walkthrough", "autograder", "tolerance", "fair_share",
-                                              "mutation"],
-                   help="a stage; 'formfactors' (hemicubes per second of the form-factor engine, and where its time "
-                        "goes, on this machine's GL); 'walkthrough' (30 views of the Cornell box: one radiosity solve "
-                        "against Mitsuba 3 per view); 'autograder' (grading time and memory per stage, against Gradescope's limits); "
-                        "'mutation' (mistakes planted in the reference's task regions: which the tests catch); "
-                        "'tolerance' (image tests' spread across rasterisers and thread counts); 'fair_share' (an "
-                        "honest student's roster grading beside a CPU burner, with and without the CPU share)")
+    from .bench import benches
+    found = benches()                     # read from the files: each stage's package, then the kit's bench/
+    b = sub.add_parser("bench", help="time-against-error benchmarks", description="Run a benchmark; prints a table and "
+                       "writes JSON.", epilog="benchmarks:\n" + "\n".join(f"  {name:<15} {bench.summary}"
+                                                                          for name, bench in found.items()),
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    b.add_argument("stage", metavar="NAME", choices=list(found),
+                   help=f"a stage ({', '.join(n for n, x in found.items() if x.name == x.stage)}) or another "
+                        f"benchmark ({', '.join(n for n, x in found.items() if x.name != x.stage)}): see below")
     b.add_argument("-o", "--output", default="bench-results",
                    help="folder for the JSON and plots (default: bench-results); the plots need "
                         "pip install 'cs451-kit[bench]' (matplotlib)")
@@ -286,7 +286,9 @@ def _commands() -> argparse.ArgumentParser:
                                        "slides/records/NAME.json, with the machine, the date and this command: the "
                                        "figures draw only from these records, never timing anything while a deck "
                                        "is built. Run it on a quiet machine.")
-    slr.add_argument("names", nargs="*", metavar="NAME", help="whitted, hemicube, radiosity (default: all)")
+    slr.add_argument("names", nargs="*", metavar="NAME", help="the records' names, the decks' benchmark figures' "
+                                                              "(default: all of them; cs451 slides record --help "
+                                                              "lists them)")
     slr.add_argument("--quick", action="store_true", help="small sizes (for tests; never commit a quick record)")
     slr.add_argument("--repeats", type=repeats, default=3, help="each timing is the median of this many runs (at least 3)")
     slr.add_argument("-o", "--output", help="folder for the records (default: slides/records in the kit)")

@@ -11,6 +11,31 @@ import pytest
 
 from cs451 import KIT_ROOT
 
+import selection
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    selection.register_markers(config)
+
+
+@pytest.hookimpl(tryfirst=True)          # before pytest's own -m selection reads the markers
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    selection.mark_and_select(config, items)
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_setup(item: pytest.Item):
+    with selection.watching_spawns(item):      # a fixture that starts a process counts for the test that asked for it
+        return (yield)
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_call(item: pytest.Item):
+    with selection.watching_spawns(item):
+        result = yield
+    selection.check_spawns(item)
+    return result
+
 
 @pytest.fixture
 def kit_root() -> Path:

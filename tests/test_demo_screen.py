@@ -16,13 +16,18 @@ from cs451 import KIT_ROOT
 from cs451.demos import overlay, run_demo
 from cs451.demos.controls import help_keys
 from cs451.imageio import load_png
+from cs451.stages import stage_names
 
 from demo_windows import XVFB, live_window_result, needs_xvfb
 
 #: Per stage: a scene other than its default, a picture size, and the picture's width in the frames it writes.
-OTHER = {"sphere": ("orrery", "400x300", 400), "whitted": ("cornell-spheres", "64x48", 640),
-         "hemicube": ("furnace", "200x150", 500), "radiosity": ("furnace", "240x180", 240),
-         "pathtrace": ("room", "48x36", 528)}
+OTHER = {
+    "sphere": ("orrery", "400x300", 400),
+    "whitted": ("cornell-spheres", "64x48", 640),
+    "hemicube": ("furnace", "200x150", 500),
+    "radiosity": ("furnace", "240x180", 240),
+    "pathtrace": ("room", "48x36", 528),
+}
 
 
 def cs451(*args: str, display: bool = False, timeout: int = 300) -> subprocess.CompletedProcess:
@@ -40,8 +45,9 @@ def help_drawn(frame: np.ndarray, picture: tuple[int, int], stage: str, lines: i
     return float(np.all(np.abs(shown[core] - panel[..., :3][core]) <= 6, axis=1).mean())
 
 
-@pytest.mark.parametrize("stage", list(OTHER))
+@pytest.mark.parametrize("stage", stage_names())    # a stage missing from OTHER fails here
 def test01_every_demo_takes_scene_and_size_and_draws_its_caption_and_help_into_the_frames(stage, tmp_path):
+    assert stage in OTHER, f"stage {stage}: no case in OTHER (a scene other than its demo's, a size, the frame width)"
     scene, size, width = OTHER[stage]
     paths = run_demo(stage=stage, output=tmp_path, window=False, scene=scene, size=size)
     frames = sorted(tmp_path.glob(f"{scene if stage == 'sphere' else stage}-[0-9][0-9].png"))
@@ -93,7 +99,7 @@ def test04_a_scene_the_demo_cannot_draw_is_one_line_naming_the_demos_that_can(st
 
 
 def test05_the_help_lists_every_key_and_the_windows_own():
-    for stage in OTHER:
+    for stage in stage_names():
         keys = [k for k, _ in help_keys(stage)]
         assert "f" in keys and "h ?" in keys and any(k.split()[0] == "q" for k in keys), (stage, keys)
     assert [k for k, _ in help_keys("radiosity")][:5] == ["space", "n →", "r", "g", "a"]

@@ -9,6 +9,7 @@ timing.
 from __future__ import annotations
 
 import datetime
+import importlib
 import json
 from pathlib import Path
 
@@ -18,7 +19,8 @@ from cs451 import bench as kit_bench
 from cs451.errors import KitError
 from cs451.slides import figures, records
 
-BENCH_FIGURES = {"bench-whitted": "whitted", "bench-hemicube": "hemicube", "bench-radiosity": "radiosity"}
+#: Each benchmark figure and the record it draws from, as the stages declare them (``records=`` of their figures).
+BENCH_FIGURES = {name: figures.spec_of(name).records[0] for name in figures.FIGURES if figures.spec_of(name).records}
 
 
 def measured(rows: int = 3) -> dict:
@@ -89,8 +91,8 @@ def test05_the_bench_figures_draw_from_the_record_alone(tmp_path: Path, monkeypa
     monkeypatch.setattr(kit_bench, "bench_module", boom)
     monkeypatch.setattr(records, "measure", boom)
     monkeypatch.setattr(cs451.gl, "create_context", boom)
-    for stage in ("whitted", "hemicube", "radiosity"):
-        module = __import__(f"cs451.stages.{stage}.figures", fromlist=["figures"])
+    drawers = {figures.spec_of(figure).draw.__module__ for figure in BENCH_FIGURES}
+    for module in [importlib.import_module(m) for m in drawers | {m.rsplit(".", 1)[0] + ".figures" for m in drawers}]:
         for name in ("reference_impl", "get_stage", "scene_data", "parse_scene"):
             if hasattr(module, name):
                 monkeypatch.setattr(module, name, boom)
@@ -130,13 +132,18 @@ def test07_every_committed_record_names_its_machine_date_and_command_and_is_a_fu
 
 def test08_the_command_records_quick_runs_into_a_folder(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     from cs451.cli import main
-    assert main(["slides", "record", "whitted", "radiosity", "--quick", "-o", str(tmp_path)]) == 0
+    names = sorted(records.recorders())                 # every record a stage's figure declares
+    assert set(names) == set(BENCH_FIGURES.values()) and len(names) >= 3
+    asked, left = names[:-1], names[-1]
+    assert main(["slides", "record", *asked, "--quick", "-o", str(tmp_path)]) == 0
     out = capsys.readouterr().out
-    for name in ("whitted", "radiosity"):
+    for name in asked:
         data = records.check_record(json.loads((tmp_path / f"{name}.json").read_text()), tmp_path, name)
-        assert data["quick"] is True and data["command"] == f"cs451 slides record whitted radiosity --quick -o {tmp_path}"
+        assert data["quick"] is True and data["command"] == f"cs451 slides record {' '.join(asked)} --quick -o {tmp_path}"
         assert f"{name}.json" in out
-    assert not (tmp_path / "hemicube.json").exists()
+    assert not (tmp_path / f"{left}.json").exists()          # only the records asked for
+    assert main(["slides", "record", left, "--quick", "-o", str(tmp_path)]) == 0
+    records.check_record(json.loads((tmp_path / f"{left}.json").read_text()), tmp_path, left)
     radiosity = json.loads((tmp_path / "radiosity.json").read_text())
     assert radiosity["machine"].get("gl_renderer")                   # GL drew its form factors: it names the renderer
 

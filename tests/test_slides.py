@@ -34,14 +34,16 @@ from cs451.cli import main
 from cs451.errors import KitError
 from cs451.slides.build import CSP, assets, build_slides, versions
 from cs451.slides.chromium import Chromium, Page, find_chromium
-from cs451.slides.deck import deck_files, read_deck
+from cs451.slides import figures as real_figures
+from cs451.slides.deck import deck_files, read_deck, deck_name
+from cs451.stages import stage_names
 
-DECKS = ("overview", "sphere", "whitted", "hemicube", "radiosity", "pathtrace")
-#: The figures the decks use, as agreed with cs451/slides/figures.py.
-FIGURE_NAMES = ("sphere-gouraud-vs-phong", "sphere-light-spaces", "sphere-modelview", "whitted-ray-tree",
-                "whitted-ray-kinds", "whitted-cutoff", "whitted-hierarchy", "hemicube-views", "hemicube-item-buffer",
-                "hemicube-delta-weights", "hemicube-row", "radiosity-progress", "radiosity-gouraud", "bench-whitted",
-                "bench-hemicube", "bench-radiosity", "pathtrace-convergence")
+#: The decks: the course's overview, then one per registered stage, in the registry's order (test01 fails where a
+#: stage has none).
+DECKS = ("overview", *stage_names())
+#: The figures the decks use: every figure the stages declare (each in its own package's figures; test01 fails on a
+#: declared figure no deck shows, and on a deck showing one nobody declares).
+FIGURE_NAMES = tuple(sorted(real_figures.FIGURES))
 #: The reference function each stub figure pretends to be drawn with (its source enters the stub's key).
 STUB_SOURCES = {"hemicube-delta-weights": ("reference/hemicube/tables.py", "delta_form_factors"),
                 "radiosity-progress": ("reference/radiosity/shooting.py", "shoot")}
@@ -140,7 +142,16 @@ def test01_every_deck_builds_into_one_file_that_fetches_nothing(built):
         assert "@import" not in styles and not re.findall(r"""url\(\s*['"]?(?!data:)""", styles), name
         assert page.count("<section ") == len(read_deck(deck_files(KIT_ROOT)[DECKS.index(name)], KIT_ROOT).slides)
     used = {ref.name for f in deck_files(KIT_ROOT) for ref in read_deck(f, KIT_ROOT).figures}
-    assert used == set(FIGURE_NAMES), "every agreed figure is shown, and no other"
+    assert used == set(FIGURE_NAMES), "every declared figure is shown, and no other"
+
+
+def test01_every_stage_s_deck_shows_a_figure_of_its_own():
+    """A stage's deck (``slides/NN-<stage>.md``) shows at least one figure its own package draws."""
+    shown = {deck_name(f): {ref.name for ref in read_deck(f, KIT_ROOT).figures} for f in deck_files(KIT_ROOT)}
+    for stage in stage_names():
+        own = {name for name in FIGURE_NAMES
+               if real_figures.spec_of(name).draw.__module__.startswith(f"cs451.stages.{stage}.")}
+        assert own & shown.get(stage, set()), f"stage {stage}: no deck slides/NN-{stage}.md showing a figure of its own"
 
 
 def test02_the_decks_typeset_the_notes_equations_and_cite_them():

@@ -9,7 +9,7 @@ Scene tests get their patches and form factors from the reference run of the pro
 ``system`` (stage 3's trusted hemicube engine), so a bug in R1 or in stage 3 costs nothing
 elsewhere; the image tests also get the values the reference's R3 and R4 display
 (``solved_system``), so they judge R5 alone. R3's tests run the submission's own R2 inside
-its loop, and say so when they fail (tests/test_radiosity_grading.py checks which tasks a
+its loop, and say so when they fail (tests/radiosity/test_radiosity_grading.py checks which tasks a
 broken function costs).
 """
 from __future__ import annotations

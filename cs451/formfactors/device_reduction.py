@@ -5,7 +5,7 @@ Only the rows come back (count · n · 8 bytes), not the pixels (count · 3r² �
 tile row, adds up the weights of each stretch of one item in double precision, and adds the stretch to the row
 as a 64-bit fixed-point number (2^-62 units) made of two 32-bit atomic adds with the carry passed on. Integer
 additions commute, so the rows are the same bits whatever order the GPU runs the invocations in; they agree
-with H5's float64 sums to about 1e-16 (``tests/test_formfactors.py``). Needs OpenGL 4.3 (compute shaders);
+with H5's float64 sums to about 1e-16 (``tests/hemicube/test_formfactors.py``). Needs OpenGL 4.3 (compute shaders);
 macOS stops at 4.1, and there the engine sums on the CPU (:mod:`.reduction`).
 """
 from __future__ import annotations

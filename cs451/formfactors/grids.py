@@ -8,7 +8,7 @@ its patch from the cell (⌊s·nu⌋, ⌊t·nv⌋). The lines s = i/nu of a plan
 the cells are the patches: the item buffer is the same except at pixels whose centres lie on a patch edge
 within rounding (the rasteriser's fixed-point edge test and the shader's float decide such a pixel
 differently), and rows are as close to a finer hemicube's as the patch-by-patch rows
-(tests/test_formfactor_grids.py).
+(tests/hemicube/test_formfactor_grids.py).
 
 Grids are found in the order the patches come in, R1's (a polygon's patches row by row along its 0→3 edge,
 each row along 0→1), and each is checked corner by corner against the bilinear grid of the planar convex

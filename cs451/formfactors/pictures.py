@@ -89,13 +89,23 @@ def formfactor_image(scene: Any, quads: np.ndarray, row: np.ndarray, calls: Stag
     """The scene from its camera, each patch painted with F from the chosen patch to it (scaled to the largest).
 
     ``calls`` (a stage-3 implementation's) place the camera: see :mod:`cs451.viewing`."""
-    from ..gl import create_context
-    from ..viewing import camera_projection, camera_view
-    width, height = size or (scene.image.width, scene.image.height)
-    view = camera_view(scene.camera, calls.views)
-    proj = camera_projection(scene.camera, width, height)
+    from ..viewing import camera_view
     value = row / max(row.max(), 1e-300)
     colours = np.stack([value, value ** 2, 0.2 * (1 - value)], axis=1)   # a warm ramp; dark blue is "sees nothing"
+    return paint_patches(scene, quads, colours, camera_view(scene.camera, calls.views), size)
+
+
+def paint_patches(scene: Any, quads: np.ndarray, colours: np.ndarray, view: np.ndarray,
+                  size: tuple[int, int] | None = None, background: Any = (0.0, 0.0, 0.0)) -> np.ndarray:
+    """The scene from its camera, each patch flat in its own colour (linear, unclamped), image rows top to bottom.
+
+    ``view`` is the camera's view matrix as a stage's H2 places it (:func:`cs451.viewing.camera_view`); the
+    projection is pyrender's. Both sides of a patch show its colour. Stage 3's pictures of a row and its deck's
+    pictures of patches share it, so a picture of patches never needs stage 4's display."""
+    from ..gl import create_context
+    from ..viewing import camera_projection
+    width, height = size or (scene.image.width, scene.image.height)
+    proj = camera_projection(scene.camera, width, height)
     tris, ids = patch_triangles(quads)
     ctx = create_context()
     prog = ctx.program(vertex_shader="""#version 330
@@ -103,13 +113,14 @@ in vec3 in_position; in vec3 in_colour; uniform mat4 u_mvp; out vec3 v_colour;
 void main() { gl_Position = u_mvp * vec4(in_position, 1.0); v_colour = in_colour; }""",
                        fragment_shader="""#version 330
 in vec3 v_colour; out vec4 colour; void main() { colour = vec4(v_colour, 1.0); }""")
-    data = np.hstack([tris.reshape(-1, 3), np.repeat(colours[ids], 3, axis=0)]).astype("f4")
+    data = np.hstack([tris.reshape(-1, 3), np.repeat(np.asarray(colours)[ids], 3, axis=0)]).astype("f4")
     vao = ctx.vertex_array(prog, [(ctx.buffer(data.tobytes()), "3f 3f", "in_position", "in_colour")])
-    prog["u_mvp"].write((proj @ view).T.astype("f4").tobytes())
+    prog["u_mvp"].write((proj @ np.asarray(view)).T.astype("f4").tobytes())
     fbo = ctx.framebuffer([ctx.texture((width, height), 4, dtype="f4")], ctx.depth_renderbuffer((width, height)))
     fbo.use()
     ctx.enable(ctx.DEPTH_TEST)
-    fbo.clear(0, 0, 0, 1, depth=1.0)
+    ctx.disable(ctx.CULL_FACE)
+    fbo.clear(*background, 1.0, depth=1.0)
     vao.render()
     img = np.frombuffer(fbo.read(components=3, dtype="f4"), dtype=np.float32).reshape(height, width, 3)
     return np.flipud(img).astype(np.float64)

@@ -25,7 +25,7 @@ Which receivers, and how (chosen by the estimated error, not by a fixed distance
   (:class:`~.visibility.Sightlines`), the shooter refined where they disagree. Carrying the centre's view over
   the whole shooter was wrong under occlusion: the Cornell box's floor (one polygon, partly under the blocks)
   summed to 0.4687 against an area average of 0.698; with sight lines 0.694, every entry of the box's 16 × 16
-  matrix within 0.006 of ray casting from random points (tests/test_proximity_occlusion.py);
+  matrix within 0.006 of ray casting from random points (tests/hemicube/test_proximity_occlusion.py);
 * in between: the ratio above from a cheap quadrature of the form-factor integral itself (cos·cos/πr²
   between Gauss points of both patches, the kit's own and not H6), applied where it moves the entry by more
   than ``PROXIMITY_ERROR`` (unit squares 0.2 wide five apart: +1.4% before). Where the hemicubes' points reach

@@ -4,7 +4,7 @@ Stage 3's H5 sums one hemicube's item buffers, and stays the student's task (gra
 trusted engine (the reference, radiosity, benches, slides) instead reduces a batch's atlas where it was
 read back: one weighted ``np.bincount`` per row of tiles over the runs of equal items along the tiles' rows,
 keyed by (hemicube, item), with H1's tables laid out as the tiles are. No tile is copied and no call is made per
-hemicube. The sums are H5's up to float64 rounding (``tests/test_formfactors.py`` checks the built-in scenes).
+hemicube. The sums are H5's up to float64 rounding (``tests/hemicube/test_formfactors.py`` checks the built-in scenes).
 A numba loop over the pixels was as fast, but importing numba added 63 MB to the radiosity main job's peak.
 """
 from __future__ import annotations

@@ -51,12 +51,14 @@ class TestGroup:
         return [f / "cgroup.procs" for f in self.folders] + self.shared
 
     def pids(self) -> list[int]:
+        """Every process now in the group's folders, sorted: what :meth:`kill_all` must end (none once it has)."""
         found: set[int] = set()
         for folder in self.folders:
             found.update(int(p) for p in _read(folder / "cgroup.procs").split())
         return sorted(found)
 
     def peak_memory(self) -> int:
+        """The most memory, in bytes, the group's processes held at once (0 where the kernel does not say)."""
         name = "memory.peak" if self.version == 2 else "memory.max_usage_in_bytes"
         text = _read(self.memory / name).strip()
         return int(text) if text.isdigit() else 0
@@ -87,6 +89,7 @@ class TestGroup:
             time.sleep(0.01)
 
     def remove(self) -> None:
+        """Kill whatever the test left running and delete the group's own folders (a v1 share it joined stays)."""
         self.kill_all()
         for folder in self.folders:
             _rmdir(folder)
@@ -139,6 +142,7 @@ class ShareGroup:
             pass
 
     def leave(self) -> None:
+        """Move the calling process back to where each :meth:`enter` found it (or the nearest folder that takes it)."""
         while self._left:
             back = self._left.pop()
             for folder in (back, back.parent, ROOT / "cpu" if self.version == 1 else ROOT):

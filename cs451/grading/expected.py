@@ -104,9 +104,12 @@ class ReferenceAnswers:
         self.dir.mkdir(parents=True, exist_ok=True)
 
     def path(self, probe: str, params: dict[str, Any], inputs: Outputs | None = None) -> Path:
+        """Where the reference's answer to this probe lies (or will), in the cache or a student copy's answers."""
         return self.dir / answer_key(probe, params, inputs)
 
     def get(self, probe: str, params: dict[str, Any], inputs: Outputs | None = None) -> Outputs:
+        """The reference's answer to a probe: from disk, or computed once in a trusted worker and stored (the grader
+        compares every submission with it); a student copy without it raises KitError."""
         path = self.path(probe, params, inputs)
         if path.exists():
             return _load(path)
@@ -140,10 +143,13 @@ class TruthValues:
         self.dir.mkdir(parents=True, exist_ok=True)
 
     def path(self, test: Test) -> Path:
+        """Where a test's truth arrays lie (or will), in the cache or a student copy's packaged answers."""
         assert test.truth is not None
         return self.dir / truth_key(test.truth, test.params)
 
     def get(self, test: Test) -> Outputs:
+        """A test's truth arrays: from disk, or its truth function evaluated here once and stored (a student copy only
+        reads them, and raises KitError where one is missing)."""
         path = self.path(test)
         if path.exists():
             return _load(path)

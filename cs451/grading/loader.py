@@ -33,6 +33,7 @@ MANIFEST = "public.json"
 
 
 def spec_dir(stage: str) -> Path:
+    """A stage's autograder folder, ``autograder/<stage>/``: its spec modules or manifest, and hidden.json."""
     return KIT_ROOT / "autograder" / stage
 
 

@@ -84,6 +84,8 @@ def unreachable(box: Sandbox) -> tuple[str, str, Path] | None:
 
 
 def usable(box: Sandbox, mode: str) -> str | None:
+    """None where ``mode`` can grade here, else why not, in words for the refusal: ``none`` only in a student copy
+    and never as root; the others once their canary passes, run with the sandbox set to that mode."""
     if mode == "none":
         if is_root():
             return "never as root"

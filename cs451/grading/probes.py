@@ -59,6 +59,7 @@ def interpret(done: sandbox.Completed, job: Path, timeout: float, seconds: float
 
 
 def write_request(job: Path, stage: str, impl: str, probe: str, params: dict[str, Any], inputs: Outputs | None) -> None:
+    """Put a probe's request (request.json) and its trusted inputs (inputs.npz) in the job folder the worker reads."""
     (job / "request.json").write_text(json.dumps({"stage": stage, "impl": impl, "probe": probe, "params": params}))
     if inputs:
         np.savez(job / "inputs.npz", **inputs)

@@ -22,6 +22,8 @@ class IsolationError(KitError):
 
 
 def drop_to(uid: int) -> None:
+    """Become ``uid`` for good (its own gid, no supplementary groups), in the child before exec; exits 111
+    rather than go on as anyone else."""
     os.setgroups([])
     os.setgid(uid)
     os.setuid(uid)
@@ -30,6 +32,7 @@ def drop_to(uid: int) -> None:
 
 
 def count_processes(uid: int) -> int:
+    """How many live processes ``uid`` has: RLIMIT_NPROC counts them all, so the sandbox adds its allowance to it."""
     return len(processes_of(uid))
 
 
@@ -47,6 +50,7 @@ def processes_of(uid: int) -> list[int]:
 
 
 def descendants(root: int) -> list[int]:
+    """``root`` and every process below it, from one reading of /proc (what the watchdog sums when no uid is given)."""
     children: dict[int, list[int]] = {}
     for stat_file in Path("/proc").glob("[0-9]*/stat"):
         try:
@@ -64,6 +68,7 @@ def descendants(root: int) -> list[int]:
 
 
 def rss(pid: int) -> int:
+    """A process's resident memory in bytes (0 once it is gone): what the watchdog sums over a test's processes."""
     try:
         for line in Path(f"/proc/{pid}/status").read_text().splitlines():
             if line.startswith("VmRSS:"):
@@ -90,6 +95,7 @@ def kill_uid(uid: int) -> None:
 
 
 def free_uid() -> int:
+    """A throwaway uid in ``UID_RANGE`` that no process runs as now, for one test (IsolationError if none is found)."""
     for _ in range(1000):
         uid = random.randrange(*UID_RANGE)
         if not processes_of(uid):
@@ -113,6 +119,8 @@ def remove_ipc(uid: int) -> None:
 
 
 def wait_for(proc: subprocess.Popen, seconds: float) -> bool:
+    """Wait up to ``seconds`` for the worker, then SIGKILL its process group either way and reap it; True where it ran
+    out of time."""
     timed_out = False
     try:
         proc.wait(timeout=seconds)

@@ -126,6 +126,7 @@ def render_report(result: GradeResult, show_hidden: bool = True) -> str:
 
 
 def write_report(folder: str | Path, result: GradeResult, show_hidden: bool = True) -> Path:
+    """Write the HTML report to ``folder/report.html`` (the folder made if need be) and return that path."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / "report.html"

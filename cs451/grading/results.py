@@ -89,6 +89,7 @@ def _summary_html(result: GradeResult) -> str:
 
 
 def write_results(path: str | Path, result: GradeResult) -> Path:
+    """Write Gradescope's results.json to ``path`` (its folder made if need be) and return the path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(to_gradescope(result), indent=2))

@@ -91,22 +91,27 @@ class GradeResult:
 
     @property
     def extensions(self) -> list[TestResult]:
+        """The tests of optional extensions: reported and scored apart, never part of the grade."""
         return [r for r in self.results if r.test.extension]
 
     @property
     def score(self) -> float:
+        """The grade: the points earned on the graded tests, hidden ones included, extensions not."""
         return sum(r.score for r in self.graded)
 
     @property
     def max_score(self) -> float:
+        """What the graded tests are worth together, hidden ones included, extensions not."""
         return sum(r.test.points for r in self.graded)
 
     @property
     def extension_score(self) -> float:
+        """The points earned on optional extensions, reported beside the grade."""
         return sum(r.score for r in self.extensions)
 
     @property
     def extension_max(self) -> float:
+        """What the optional extensions' tests are worth together."""
         return sum(r.test.points for r in self.extensions)
 
 

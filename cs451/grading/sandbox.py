@@ -156,6 +156,7 @@ class Sandbox:
         return [Path(d) / n for d, dirs, files in os.walk(root) for n in dirs + files]
 
     def close(self) -> None:
+        """Unmount and remove every job folder and the run folder, and remove the CPU share; safe to call twice."""
         for job in list(self._job_mounts):
             self._finish_job(job)
         if self.run_dir is not None:
@@ -168,13 +169,16 @@ class Sandbox:
     # -- paths as the worker sees them --
     @property
     def visible_engine(self) -> str:
+        """Where the worker finds the engine: ``/kit`` under bubblewrap, else the path of the copy it reads."""
         return "/kit" if self.mode == "bubblewrap" else str(self._copies(None)[0])
 
     @property
     def visible_upload(self) -> str:
+        """Where the worker finds the staged upload: ``/submission`` under bubblewrap, else the copy it reads."""
         return "/submission" if self.mode == "bubblewrap" else str(self._copies(None)[1])
 
     def visible_job(self, job: Path) -> str:
+        """Where the worker finds a job folder: ``/job`` under bubblewrap, else the folder itself."""
         return "/job" if self.mode == "bubblewrap" else str(job)
 
     def visible(self, staged_path: Path) -> str:
@@ -188,6 +192,7 @@ class Sandbox:
         return self.mode in ("bubblewrap", "none")
 
     def describe(self) -> str:
+        """How this run isolates the submission, in one line for the results and the report (mode, caps, CPU share)."""
         text = DESCRIPTIONS[self.mode]
         if self.uid_for_tests and self.mode == "bubblewrap":
             text += ", as a throwaway user per test"
@@ -239,6 +244,7 @@ class Sandbox:
         return kill
 
     def finish_job(self, job: Path) -> None:
+        """Unmount and remove a test's job folder once its answer is read (the grader calls it after each probe)."""
         self._finish_job(job)
 
     def _copies(self, job: Path | None) -> tuple[Path, Path]:
@@ -272,6 +278,7 @@ class Sandbox:
         return engine, upload
 
     def worker_args(self, job: Path) -> list[str]:
+        """The Python arguments that run the sandboxed worker on a job, naming its folder as the worker sees it."""
         return ["-m", "cs451.grading.worker", self.visible_job(job)]
 
     def run(self, python_args: list[str], job: Path, limits: Limits) -> Completed:

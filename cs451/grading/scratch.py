@@ -16,6 +16,8 @@ OUTPUT_LIMIT = 4000            # characters of printed output kept
 
 
 def is_root() -> bool:
+    """Whether the grader runs as root (never on Windows): only root may use throwaway uids, cgroups and mounts, and
+    root never runs a submission without isolation."""
     return hasattr(os, "geteuid") and os.geteuid() == 0
 
 
@@ -62,6 +64,8 @@ def mount_tmpfs(folder: Path, size: int) -> bool:
 
 
 def free_bytes(folder: Path) -> int:
+    """The bytes an ordinary user may still write on ``folder``'s file system (a job tmpfs nearly full: its answer
+    may not have fitted)."""
     st = os.statvfs(folder)
     return st.f_bavail * st.f_frsize
 
@@ -78,6 +82,7 @@ def remove_tree(path: Path) -> None:
 
 
 def read_log(log_path: Path) -> str:
+    """A worker's printed output: its first OUTPUT_LIMIT bytes, bad bytes replaced, and a note of what was cut."""
     size = log_path.stat().st_size
     with open(log_path, "rb") as log:
         text = log.read(OUTPUT_LIMIT).decode("utf-8", "replace")

@@ -50,10 +50,12 @@ class Verdict:
 
     @property
     def passed(self) -> bool:
+        """Whether every point was earned (a partial score is not a pass)."""
         return self.fraction >= 1.0
 
     @staticmethod
     def of(ok: bool, message: str, **kw: Any) -> "Verdict":
+        """An all-or-nothing verdict: every point where ``ok``, none otherwise."""
         return Verdict(1.0 if ok else 0.0, message, **kw)
 
 
@@ -79,13 +81,17 @@ class Ref:
 
     @staticmethod
     def to(fn: Callable[..., Any], **kwargs: Any) -> "Ref":
+        """Name ``fn`` by module and name, its keyword arguments frozen as sorted JSON (equal refs compare equal)."""
         return Ref(fn.__module__, fn.__name__, json.dumps(jsonable(kwargs), sort_keys=True))
 
     @property
     def kwargs(self) -> dict[str, Any]:
+        """The keyword arguments the named function is called with, decoded from their JSON text."""
         return json.loads(self.args)
 
     def resolve(self, allowed: re.Pattern) -> Callable[..., Any]:
+        """The named function, imported only from a module that ``allowed`` matches (a spec may name nothing else);
+        ValueError otherwise."""
         if not allowed.match(self.module):
             raise ValueError(f"{self.module}.{self.name}: not a module specs may name here")
         module = import_from_kit(self.module) if self.module.startswith("autograder.") \
@@ -96,10 +102,12 @@ class Ref:
         return fn
 
     def to_json(self) -> dict[str, Any]:
+        """The reference as a student copy's manifest holds it: module, name and keyword arguments."""
         return {"module": self.module, "name": self.name, "kwargs": self.kwargs}
 
     @staticmethod
     def from_json(data: dict[str, Any]) -> "Ref":
+        """A reference back from :meth:`to_json`'s form."""
         return Ref(data["module"], data["name"], json.dumps(data.get("kwargs", {}), sort_keys=True))
 
 
@@ -169,7 +177,7 @@ class Test:
         return "after_published" if self.hidden else "visible"
 
     def to_json(self) -> dict[str, Any]:
-        """The test as a student copy's manifest holds it (``truth`` only as a flag: its arrays ship beside)."""
+        """The test as a student copy's manifest holds it (``truth`` by name only: its arrays ship beside)."""
         return {"name": self.name, "task": self.task, "points": self.points, "probe": self.probe,
                 "params": self.params, "check": self.check.to_json(), "tolerance": self.tolerance,
                 "expected": self.expected, "given": self.given, "truth": self.truth.to_json() if self.truth else None,
@@ -177,6 +185,7 @@ class Test:
 
     @staticmethod
     def from_json(data: dict[str, Any]) -> "Test":
+        """A test back from a student copy's manifest (:meth:`to_json`): never hidden, and with no variant."""
         return Test(data["name"], data["task"], float(data["points"]), data["probe"], data["params"],
                     Ref.from_json(data["check"]), data["tolerance"], data["expected"], data.get("given"),
                     Ref.from_json(data["truth"]) if data.get("truth") else None, bool(data.get("edge_case")), False,

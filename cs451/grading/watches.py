@@ -46,6 +46,8 @@ class DiskWatch:
         self._thread.start()
 
     def used(self) -> int:
+        """Bytes the test keeps now: its job folder, and for a uid what it owns at the top of every world-writable
+        folder."""
         total = bytes_below(self.job)[0]
         for folder in world_writable_dirs() if self.uid is not None else []:
             try:
@@ -67,6 +69,7 @@ class DiskWatch:
                 self.kill()
 
     def stop(self) -> None:
+        """End the watch and wait for its thread (after the test, before its files are removed); ``tripped`` stays."""
         self._stop.set()
         self._thread.join()
 
@@ -98,6 +101,7 @@ class Watchdog:
                         pass
 
     def stop(self) -> None:
+        """End the watch and wait for its thread; ``peak`` and ``tripped`` then hold for the whole test."""
         self._stop.set()
         self._thread.join()
 

@@ -30,6 +30,8 @@ def _student_frame(tb: traceback.StackSummary, impl_dir: str) -> str:
 
 
 def run(job: Path) -> int:
+    """Answer the job's request: load the submission, run its probe (or the interface check), write output.npz and
+    status.json; returns 0 once status.json is written, since a failure goes there and not in the exit code."""
     from ..errors import KitError
     from ..impl import load_impl
     from ..stages import get_stage

@@ -56,6 +56,8 @@ def worker_env(home: str, engine: str) -> dict[str, str]:
 
 
 def set_limits(limits: Limits) -> None:
+    """In the worker's child before exec: cap CPU time (about twice the wall limit), address space and file size, allow
+    no core file, and make it the OOM killer's first choice (nothing where ``resource`` is missing)."""
     if resource is None:
         return
     cpu = int(limits.wall_seconds * 2) + 5

@@ -4,7 +4,7 @@
 ``cs451/stages/<stage>/figures.py``, found through the registry of stages), each with one line that says what
 it shows. Every figure is drawn by the reference through its stage's interface (``get_stage(...)``: the
 stage's ``render``, its probes, ``Stage.call`` and ``functions_replaced``, its diagrams), the hemicube
-engine's pictures (:mod:`cs451.formfactors.pictures`) and the engine's drawing (:mod:`cs451.drawing`), so a change
+engine's pictures (:mod:`cs451.formfactors.pictures`) and the engine's drawing (:mod:`cs451.stages.radiosity.display`), so a change
 to the reference changes the slides. Timings are never measured while a deck is built: the benchmark figures draw
 only from records (``slides/records/<name>.json``, :mod:`cs451.slides.records`) that ``cs451 slides record`` made,
 each naming its machine, date and command.
@@ -16,7 +16,7 @@ handout and none is. The PNG carries its key and the numbers it shows (a row sum
 text chunks: :func:`figure_facts` reads them back.
 
 Ray tracing figures run the reference's plain numpy path (its speed layer held off: ``accel.forced``): it gives
-the same colours as the compiled kernels (tests/test_whitted_frame.py), takes a few seconds at slide sizes (renders
+the same colours as the compiled kernels (tests/whitted/test_whitted_frame.py), takes a few seconds at slide sizes (renders
 are made at twice their shown size), and never waits for numba's first compile (~2 minutes on two cores); the path
 tracer's figure (128 passes of 208 × 208) takes about a minute. Not thread-safe: build figures in one thread, or in
 processes.

@@ -37,7 +37,7 @@ MACHINE = ("cpu", "cores", "os", "python", "numpy")
 @dataclass(frozen=True)
 class Recorder:
     """One record: what it measures, and the benchmark function that measures it
-    (``bench/<module>.py::<function>(quick, repeats)`` returning ``rows``, ``columns``, ``params`` and, where GL
+    (``<module>::<function>(quick, repeats)``, a stage's benchmark module, returning ``rows``, ``columns``, ``params`` and, where GL
     drew, ``gl_renderer``)."""
     name: str
     description: str
@@ -51,7 +51,8 @@ RECORDERS: dict[str, Recorder] = {}
 
 
 def declare_record(name: str, description: str, module: str, function: str = "slide_record") -> None:
-    """A record a stage's benchmark figure draws from, measured by ``bench/<module>.py::<function>``."""
+    """A record a stage's benchmark figure draws from, measured by ``<module>::<function>`` (``module`` a
+    benchmark module of the stage's package, named in full: ``f"{__package__}.bench"``)."""
     RECORDERS[name] = Recorder(name, description, module, function)
 
 
@@ -192,10 +193,12 @@ def write_record(name: str, measured: dict[str, Any], *, command: str, repeats: 
 
 
 def measure(name: str, quick: bool = False, repeats: int = MIN_REPEATS) -> dict[str, Any]:
-    """Run record ``name``'s benchmark function (``bench/<module>.py``), as ``cs451 slides record`` does."""
-    from ..bench import bench_module
+    """Run record ``name``'s benchmark function (in its stage's benchmark module), as ``cs451 slides record`` does."""
+    import importlib
+    from .. import import_from_kit
     recorder = recorders()[name]
-    return getattr(bench_module(recorder.module), recorder.function)(quick=quick, repeats=repeats)
+    import_from_kit("bench")                # benchmarks import the kit's bench/ and autograder/ from its folder
+    return getattr(importlib.import_module(recorder.module), recorder.function)(quick=quick, repeats=repeats)
 
 
 def record(names: list[str] | None = None, quick: bool = False, repeats: int = MIN_REPEATS,

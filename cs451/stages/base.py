@@ -53,6 +53,7 @@ class Task:
 
     @property
     def label(self) -> str:
+        """How messages name the task: its ID and function, ``S1 perspective()``."""
         return f"{self.id} {self.function}()"
 
 
@@ -60,6 +61,7 @@ class Probes(dict):
     """A stage's probes by name; ``@PROBES.register`` adds ``probe_<name>`` as ``<name>``."""
 
     def register(self, fn: Callable[..., dict[str, np.ndarray]]) -> Callable[..., dict[str, np.ndarray]]:
+        """Add ``probe_<name>`` as the probe ``<name>`` (a decorator: the function comes back unchanged)."""
         self[fn.__name__.removeprefix("probe_")] = fn
         return fn
 
@@ -133,6 +135,7 @@ class Stage:
     scene_check: Callable[[Any], None] | None = None
 
     def task(self, task_id: str) -> Task:
+        """The task with this ID (``S1``); KeyError where the stage has none."""
         for t in self.tasks:
             if t.id == task_id:
                 return t
@@ -204,6 +207,8 @@ class Stage:
         return load_impl(earlier_stage_impl(earlier), earlier)
 
     def handout_link(self, task: Task) -> str:
+        """Where the handout explains a task, as a path from the kit's root with GitHub's heading anchor (the hint
+        an unimplemented stub's message gives)."""
         anchor = f"{task.id}-{task.title}".lower().replace(" ", "-")
         anchor = "".join(c for c in anchor if c.isalnum() or c == "-")
         return f"assignments/{self.handout}/README.md#{anchor}"

@@ -2,7 +2,7 @@
 vectorised student solution looks like.
 
 The kit's compiled kernels (instructor-side, ``cs451/stages/whitted/accel/``) take the reference's large
-batches through its one hook; both give the same hits (``tests/test_whitted_robust.py`` checks).
+batches through its one hook; both give the same hits (``tests/whitted/test_whitted_robust.py`` checks).
 """
 # BEGIN SOLUTION
 from __future__ import annotations

@@ -44,6 +44,7 @@ class HemicubeOptions:
     rotate: bool = field("Rotate the hemicube about the normal by a seeded random angle.", False)
 
     def validate(self, ctx: Context) -> None:
+        """Refuse an odd resolution, or one below 2: a side face is half as high as the top face is wide."""
         if self.resolution % 2 or self.resolution < 2:
             raise ctx.child("resolution").error(f"must be an even number >= 2, got {self.resolution}")
 
@@ -51,27 +52,33 @@ class HemicubeOptions:
 # --- calling the student's functions, with checks on what they return --------
 
 def call_tables(impl: Any, resolution: int) -> tuple[np.ndarray, np.ndarray]:
+    """H1, checked: the top face's delta form factors ``(r, r)`` and a side face's ``(r // 2, r)``."""
     return STAGE.call(impl, "H1", int(resolution))
 
 
 def call_views(impl: Any, center: np.ndarray, normal: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """H2, checked: the five view matrices ``(5, 4, 4)`` of a hemicube at ``center`` facing ``normal``."""
     return STAGE.call(impl, "H2", np.array(center, float), np.array(normal, float), np.array(up, float))
 
 
 def call_projections(impl: Any, near: float, far: float) -> np.ndarray:
+    """H3, checked: the top face's and a side face's projection matrices, ``(2, 4, 4)``."""
     return STAGE.call(impl, "H3", float(near), float(far))
 
 
 def call_shaders(impl: Any) -> tuple[str, str]:
+    """H4, checked: the GLSL vertex and fragment sources that draw an item buffer of patch ids."""
     return STAGE.call(impl, "H4")
 
 
 def call_row(impl: Any, top_items: np.ndarray, side_items: np.ndarray, top_w: np.ndarray, side_w: np.ndarray,
              n: int) -> np.ndarray:
+    """H5, checked: one hemicube's row of form factors ``(n,)``, summed from its item buffers and the tables."""
     return STAGE.call(impl, "H5", top_items, side_items, top_w, side_w, int(n))
 
 
 def call_contour(impl: Any, point: np.ndarray, normal: np.ndarray, polygon: np.ndarray) -> float:
+    """H6, checked: the form factor from a point with ``normal`` to ``polygon``, a float (the proximity fix)."""
     return float(STAGE.call(impl, "H6", np.array(point, float), np.array(normal, float), np.array(polygon, float)))
 
 
@@ -114,10 +121,12 @@ CELL_BYTES = 16
 
 
 def hemicube_bytes(resolution: int, batch: int = 1) -> float:
+    """Bytes that ``batch`` hemicubes of ``resolution`` hold (3 r² cells each): stages 3 and 4 estimate with it."""
     return float(CELL_BYTES) * 3 * resolution * resolution * batch
 
 
 def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
+    """The memory a render needs, from the options alone: one hemicube of ``options.hemicube.resolution``."""
     from ...limits import Cost
     r = STAGE.options(scene).resolution
     return [Cost("options.hemicube.resolution", hemicube_bytes(r), f"a hemicube of resolution {r}")]
@@ -150,28 +159,33 @@ PROBES = Probes()
 
 @PROBES.register
 def probe_tetrahedron(impl: Any, resolution: int) -> dict[str, np.ndarray]:
+    """H7 alone: one face of the cubic tetrahedron ``(r, r)``, for the cell and three-face-sum tests."""
     return {"face": STAGE.call(impl, "H7", int(resolution))}
 
 
 @PROBES.register
 def probe_tables(impl: Any, resolution: int) -> dict[str, np.ndarray]:
+    """H1 alone: the top and side tables, ``(r, r)`` and ``(r // 2, r)``, for the cell and sum tests."""
     top, side = call_tables(impl, resolution)
     return {"top": top, "side": side}
 
 
 @PROBES.register
 def probe_views(impl: Any, center: list, normal: list, up: list) -> dict[str, np.ndarray]:
+    """H2 alone: the five view matrices ``(5, 4, 4)``, compared with the truth's."""
     return {"views": call_views(impl, np.array(center, float), np.array(normal, float), np.array(up, float))}
 
 
 @PROBES.register
 def probe_projections(impl: Any, near: float, far: float) -> dict[str, np.ndarray]:
+    """H3 alone: the top and side projections ``(2, 4, 4)``, compared with the truth's."""
     return {"projections": call_projections(impl, near, far)}
 
 
 @PROBES.register
 def probe_row_from_items(impl: Any, top_items: list, side_items: list, top_weights: list, side_weights: list,
                          n_patches: int) -> dict[str, np.ndarray]:
+    """H5 on given random item buffers and the true tables: the row ``(n_patches,)``, a known sum."""
     args = [np.asarray(top_items, dtype=np.uint32), np.asarray(side_items, dtype=np.uint32),
             np.asarray(top_weights, dtype=np.float64), np.asarray(side_weights, dtype=np.float64)]
     return {"row": call_row(impl, *args, int(n_patches))}
@@ -179,6 +193,7 @@ def probe_row_from_items(impl: Any, top_items: list, side_items: list, top_weigh
 
 @PROBES.register
 def probe_contour(impl: Any, point: list, normal: list, polygon: list) -> dict[str, np.ndarray]:
+    """H6 alone: the point-to-polygon form factor as a 0-d array ``F``, compared with Lambert's formula."""
     return {"F": np.array(call_contour(impl, np.array(point, float), np.array(normal, float), np.array(polygon, float)))}
 
 

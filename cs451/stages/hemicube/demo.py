@@ -160,6 +160,8 @@ class HemicubeDemo(Prepared):
 
     # --- the player's interface ---------------------------------------------------------------
     def frame_size(self) -> tuple[int, int]:
+        """(width, height): the scene, the unfolded item buffer and the delta form factors side by side, the five
+        views in a strip below."""
         return self.size
 
     def _preparing(self) -> Iterator[str]:
@@ -174,6 +176,8 @@ class HemicubeDemo(Prepared):
             pass
 
     def busy(self) -> bool:
+        """Whether there is work: no patch shown yet, another patch picked, the shown row still to be fixed, or the
+        sweep's next patch due."""
         due = self.sweeping and time.perf_counter() - self._swept >= SWEEP_SECONDS
         return self.shown is None or self.shown.patch != self.patch or not self.shown.final or due
 
@@ -192,6 +196,8 @@ class HemicubeDemo(Prepared):
         return False
 
     def handle(self, event: Event) -> None:
+        """Arrows step through the patches, a click picks one, space sweeps; p, r and + - toggle the fix or the
+        rotation, or change the resolution, and drop what is shown."""
         if event[0] == "click":
             picked = self.pick(int(event[1]), int(event[2]))
             if picked is not None:
@@ -217,6 +223,7 @@ class HemicubeDemo(Prepared):
         return [[]] + [[("key", "right")] for _ in range(self.n - 1)]
 
     def frame(self) -> np.ndarray:
+        """The current picture, composed once for what is shown and kept until that changes."""
         self.ready()
         if self.shown is None:
             self.show(self.patch)
@@ -225,6 +232,8 @@ class HemicubeDemo(Prepared):
         return self._frame
 
     def caption(self) -> str:
+        """Three lines: the patch and its row sum (with or without the fix), H5's row alone and F to the light, and
+        the settings."""
         self.frame()
         return "\n".join(self._caption())
 

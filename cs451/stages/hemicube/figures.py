@@ -2,13 +2,12 @@
 """
 from __future__ import annotations
 
-import math
 from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 
-from ...bench import bench_module
+from ... import import_from_kit
 from ...errors import KitError
 from ...imageio import to_uint8
 from ...patches import patch_centers, patch_normals, scene_polygons
@@ -36,7 +35,7 @@ def camera_matrix(camera: Any, size: tuple[int, int]) -> np.ndarray:
 
 HEMICUBE_KIT = ("cs451.stages.hemicube", "cs451.stages.base", "cs451.formfactors.rows", "cs451.formfactors.atlas",
                 "cs451.formfactors.geometry", "cs451.formfactors.pictures", "cs451.formfactors.proximity",
-                "cs451.patches", "cs451.drawing", "cs451.viewing", "cs451.gl", "cs451.scene")
+                "cs451.patches", "cs451.viewing", "cs451.gl", "cs451.scene")
 #: the item buffer's faces in H2's order
 FACES = ("top", "side 1", "side 2", "side 3", "side 4")
 #: the patch whose hemicube the figures show: on the red wall (polygon 4), above the blocks, seen by the camera
@@ -56,7 +55,7 @@ def _cornell(split: int, closed: bool = False) -> SimpleNamespace:
     if closed:
         polygons = np.concatenate([polygons, _front_wall(polygons)[None]])
         colours = np.concatenate([colours, [[0.6, 0.6, 0.6]]])
-    quads, parent = bench_module("meshes").subdivide_uniform(polygons, split)
+    quads, parent = import_from_kit("bench.meshes").subdivide_uniform(polygons, split)
     return SimpleNamespace(scene=scene, quads=quads, parent=parent, colours=colours[parent],
                            front=len(polygons) - 1 if closed else None)
 
@@ -90,18 +89,12 @@ def _shooter(box: SimpleNamespace, shooter: dict[str, Any]) -> int:
     return int(candidates[np.argmin(distance)])
 
 
-def flat_corners(quads: np.ndarray, parent: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Vertex colours as R5 returns them, but each patch's own corners in its own value: flat patches."""
-    return quads.reshape(-1, 3), np.repeat(values, quads.shape[1], axis=0), np.arange(quads.size // 3).reshape(-1, 4)
-
-
 def _patch_image(scene: Any, quads: np.ndarray, values: np.ndarray, size: tuple[int, int], views: Any) -> np.ndarray:
-    """The patches from the scene camera, each flat in its colour ``values`` (linear), drawn by the engine's drawer
-    (:func:`cs451.drawing.draw_solution`, which shows B/π: hence the exposure π)."""
-    from ...drawing import draw_solution
+    """The patches from the scene camera, each flat in its colour ``values`` (linear), as stage 3's pictures paint
+    them (:func:`cs451.formfactors.pictures.paint_patches`)."""
+    from ...formfactors.pictures import paint_patches
     from ...viewing import camera_view
-    patches = SimpleNamespace(quads=quads, parent=np.arange(len(quads)))
-    return draw_solution(scene, flat_corners, patches, values, size, camera_view(scene.camera, views.views), math.pi)
+    return paint_patches(scene, quads, values, camera_view(scene.camera, views.views), size, scene.image.background)
 
 
 def _face_direction(view: np.ndarray) -> str:
@@ -300,7 +293,7 @@ def _rays_label(n: int) -> str:
 
 declare_record("hemicube", "Form factors where patches hide each other (the Cornell box, whole and cut 4 × 4): the hemicube "
                            "at resolutions, the proximity fix and the split shooter, and ray casting, time against error "
-                           "from the area average", "hemicube_occluded")
+                           "from the area average", f"{__package__}.bench_occluded")
 
 
 @slide_figure("bench-hemicube",

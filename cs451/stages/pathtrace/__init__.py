@@ -66,6 +66,8 @@ def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
 
 
 def prepare(scene: Scene, max_depth: int | None = None, roulette_depth: int | None = None) -> paths.PathScene:
+    """The scene as the path tracer's arrays (:class:`paths.PathScene`), with ``options.pathtrace``'s depths unless
+    given here (validated either way)."""
     opts = STAGE.options(scene, max_depth=max_depth, roulette_depth=roulette_depth)
     return paths.build(scene, opts.max_depth, opts.roulette_depth)
 
@@ -157,6 +159,8 @@ def probe_stratified(impl: Any, scene: dict, points: list, normals: list, albedo
 
 @PROBES.register
 def probe_roulette(impl: Any, weights: list, u: list) -> dict[str, np.ndarray]:
+    """P3 on given weights ``(n, 3)`` and uniform numbers ``(n,)``: which paths go on ``(n,) bool`` and their new
+    weights ``(n, 3)``, checked exactly against the rule."""
     beta = _array(weights, (None, 3), "weights")
     alive, out = STAGE.call(impl, "P3", beta, _array(u, (len(beta),), "u"))
     return {"alive": alive, "weights": out}
@@ -194,6 +198,8 @@ def probe_polygon_radiance(impl: Any, scene: dict, polygons: list[int], samples:
 
 @PROBES.register
 def probe_render(impl: Any, scene: dict, size: list[int], spp: int, seed: int = 0) -> dict[str, np.ndarray]:
+    """The whole renderer on the submission (its camera rays and P4): the mean image ``(h, w, 3)`` of ``spp`` passes
+    at ``size``, and the tracer's counters."""
     image, counters = render_traced(parse_scene(scene, "<test scene>"), impl, (int(size[0]), int(size[1])), spp, seed)
     return {"image": image, **{k: np.array(v) for k, v in counters.items()}}
 

@@ -60,13 +60,17 @@ class PathDemo(Prepared):
 
     # --- the player's interface ---------------------------------------------------------------
     def frame_size(self) -> tuple[int, int]:
+        """(width, height): the image with each pixel drawn as a ``zoom`` × ``zoom`` square, at least 512 wide."""
         return self.width * self.zoom, self.height * self.zoom
 
     def busy(self) -> bool:
+        """Whether another pass is due: not paused, and fewer passes than the target."""
         self.ready()
         return not self.paused and self.passes < self.target
 
     def handle(self, event: Event) -> None:
+        """Space pauses or resumes, r starts again, d toggles the direct light alone (and starts again); clicks do
+        nothing."""
         self.ready()
         if event[0] != "key":
             return
@@ -96,6 +100,7 @@ class PathDemo(Prepared):
         return (self.total / max(self.passes, 1)).reshape(self.height, self.width, 3)
 
     def frame(self) -> np.ndarray:
+        """The running mean, tone-mapped and zoomed, made once per pass and kept until the next."""
         self.ready()
         if self._frame is None:
             image = to_uint8(self.image(), self.scene.image.exposure, self.scene.image.srgb)
@@ -103,6 +108,7 @@ class PathDemo(Prepared):
         return self._frame
 
     def caption(self) -> str:
+        """One line: samples per pixel, all bounces or direct light only, mean bounces a path, passes a second."""
         self.ready()
         return "\n".join(self._caption())
 

@@ -40,6 +40,7 @@ class PathScene:
 
     @property
     def n_triangles(self) -> int:
+        """How many triangles the scene has, the light's included (a ray caster sizes its chunks by it)."""
         return len(self.v0)
 
 

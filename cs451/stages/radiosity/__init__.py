@@ -5,10 +5,10 @@ submission, the probes the grader runs and ``render``. The engine does the rest
 on those calls: :mod:`cs451.patching` turns a scene into patches with the
 student's subdivision (R1), the hemicube engine of stage 3
 (:class:`cs451.formfactors.HemicubeFormFactors`, lazily, one row when a patch
-shoots) gives form factors, :mod:`cs451.solvers` runs the student's shooting
-loop (R2, R3) and ambient term (R4), and :mod:`cs451.drawing` draws the student's
+shoots) gives form factors, :mod:`cs451.stages.radiosity.solvers` runs the student's shooting
+loop (R2, R3) and ambient term (R4), and :mod:`cs451.stages.radiosity.display` draws the student's
 vertex colours (R5) Gouraud-shaded, adding the highlight of glossy materials
-(:mod:`cs451.specular`, notes §2.3) on top. The image shows radiance B/π, so it is
+(:mod:`cs451.stages.radiosity.highlight`, notes §2.3) on top. The image shows radiance B/π, so it is
 directly comparable with a path tracer.
 """
 from __future__ import annotations
@@ -21,11 +21,11 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from ... import drawing, patching, solvers, viewing
-from ... import specular as glossy       # the module; `specular` is also an option below
+from ... import patching, viewing
+from . import display as drawing, highlight as glossy, solvers   # `display`, `specular`: names used below
 from ...patching import Patches
 from ...errors import KitError
-from ...solvers import MatrixRows, Solution, solve_direct, shooting_matrix
+from .solvers import MatrixRows, Solution, solve_direct, shooting_matrix
 from ...scene import AreaLight, Polygon, Scene, parse_scene
 from ..base import Out, Probes, Stage, Task, check_returns, part, student_call
 from .options import RadiosityOptions
@@ -56,7 +56,7 @@ TASKS = (
 
 SOLVERS = ("progressive", "jacobi", "gauss-seidel", "direct")
 #: hemicubes per read-back while shooting: a row asked for is rendered with the rows of the next likely shooters
-#: (:class:`cs451.solvers.RowsAhead`); measured in ``cs451 bench radiosity`` (rows ahead, and those never used)
+#: (:class:`cs451.stages.radiosity.solvers.RowsAhead`); measured in ``cs451 bench radiosity`` (rows ahead, and those never used)
 ROWS_PER_BATCH = 16
 #: ... doubling up to this many: the room shoots 2,381 of 2,408 patches (183 read-backs of 16 became 56)
 ROWS_PER_BATCH_MOST = 64
@@ -67,32 +67,43 @@ RESAMPLE_BLIND = 3
 # --- calling the student's functions, with checks on what they return ------------
 
 def call_subdivide(impl: Any, quads: np.ndarray, max_edge: float) -> tuple[np.ndarray, np.ndarray]:
+    """R1, checked: the patches ``(m, 4, 3)`` of ``quads`` cut to ``max_edge``, and the quad each came from
+    ``(m,) int``."""
     return STAGE.call(impl, "R1", np.array(quads, dtype=np.float64), float(max_edge))
 
 
 def call_shoot(impl: Any, i: int, row: np.ndarray, areas: np.ndarray, reflectance: np.ndarray,
                radiosity: np.ndarray, unshot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """R2 on copies, checked: patch ``i`` shoots its unshot radiosity along ``row``; the new radiosity and unshot,
+    ``(n, 3)`` each (the caller's arrays stay as they were)."""
     return STAGE.call(impl, "R2", int(i), row.copy(), areas.copy(), reflectance.copy(), radiosity.copy(), unshot.copy())
 
 
 def call_ambient(impl: Any, areas: np.ndarray, reflectance: np.ndarray, unshot: np.ndarray) -> np.ndarray:
+    """R4 on copies, checked: the ambient term ``(3,)`` of the unshot radiosity, for previews."""
     return STAGE.call(impl, "R4", areas.copy(), reflectance.copy(), unshot.copy())
 
 
 def call_vertex_colors(impl: Any, quads: np.ndarray, parent: np.ndarray, radiosity: np.ndarray
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """R5 on copies, checked: the shared vertices ``(k, 3)``, their colours ``(k, 3)`` and each patch's corners
+    ``(m, 4) int``, which the display draws Gouraud-shaded."""
     return STAGE.call(impl, "R5", quads.copy(), parent.copy(), radiosity.copy())
 
 
 def call_progressive(impl: Any, row: Callable, areas: np.ndarray, reflectance: np.ndarray, emission: np.ndarray,
                      tolerance: float, max_shots: int, overshoot: float, on_shot: Callable | None
                      ) -> tuple[np.ndarray, np.ndarray, list[int]]:
+    """R3, checked: the shooting loop on ``row(i)``'s form factors; the radiosity and unshot ``(n, 3)`` and the
+    order of shots as a list of ints."""
     return _shooting_call(impl, "R3", (row, areas, reflectance, emission, tolerance, max_shots, overshoot, on_shot))
 
 
 def call_solve_again(impl: Any, known: dict, row: Callable, areas: np.ndarray, reflectance: np.ndarray,
                  emission: np.ndarray, tolerance: float, max_shots: int, overshoot: float, on_shot: Callable | None
                  ) -> tuple[np.ndarray, np.ndarray, list[int]]:
+    """R6, checked: R3's loop, taking rows from ``known`` (patch index to row) and adding those it computes; returns
+    what R3 returns. ``known`` is passed as it is, not copied: filling it is the task."""
     return _shooting_call(impl, "R6", (known, row, areas, reflectance, emission, tolerance, max_shots, overshoot,
                                        on_shot))
 
@@ -146,13 +157,13 @@ def make_patches(scene: Scene, impl: Any, patch_size: float) -> Patches:
 
 
 def solve_progressive(impl: Any, rows: Any, *args: Any, **kwargs: Any) -> Solution:
-    """The implementation's shooting loop on ``rows`` (:func:`cs451.solvers.solve_progressive`)."""
+    """The implementation's shooting loop on ``rows`` (:func:`cs451.stages.radiosity.solvers.solve_progressive`)."""
     return solvers.solve_progressive(calls(impl), rows, *args, **kwargs)
 
 
 def solve(patches: Patches, impl: Any, opts: RadiosityOptions, rows: Any = None, on_shot: Callable | None = None) -> Solution:
     """Solve with the chosen solver; rows from the hemicube engine unless given (``opts.reciprocity``: every row,
-    made reciprocal first, :func:`cs451.solvers.solve`)."""
+    made reciprocal first, :func:`cs451.stages.radiosity.solvers.solve`)."""
     if rows is None:
         rows = hemicube_formfactors(patches.quads, opts.resolution, opts.proximity, batch=ROWS_PER_BATCH_MOST)
     return solvers.solve(patches, calls(impl), opts, rows, on_shot, rows_ahead=ROWS_PER_BATCH - 1,
@@ -170,8 +181,8 @@ def camera_view(scene: Scene) -> np.ndarray:
 def draw_solution(scene: Scene, impl: Any, patches: Patches, display: np.ndarray, size: tuple[int, int] | None,
                   exposure: float = 1.0, drawer: Any = None, view: np.ndarray | None = None,
                   highlight: glossy.Highlight | None = None) -> np.ndarray:
-    """The Gouraud-shaded image of per-patch radiosities through the implementation's R5 (:mod:`cs451.drawing`),
-    with the glossy materials' highlight (:func:`cs451.specular.highlight`) on top when one is given."""
+    """The Gouraud-shaded image of per-patch radiosities through the implementation's R5 (:mod:`cs451.stages.radiosity.display`),
+    with the glossy materials' highlight (:func:`cs451.stages.radiosity.highlight.highlight`) on top when one is given."""
     return drawing.draw_solution(scene, calls(impl).corner_colors, patches, display, size,
                                  camera_view(scene) if view is None else view, exposure, drawer, highlight)
 
@@ -251,6 +262,7 @@ PROBES = Probes()
 
 @PROBES.register
 def probe_subdivide(impl: Any, quads: list, max_edge: float) -> dict[str, np.ndarray]:
+    """R1 alone on given quads: the patches ``(m, 4, 3)`` and their parents ``(m,)``, against the bilinear grid."""
     patches, parent = call_subdivide(impl, np.asarray(quads, dtype=np.float64), max_edge)
     return {"patches": patches, "parent": parent}
 
@@ -258,6 +270,8 @@ def probe_subdivide(impl: Any, quads: list, max_edge: float) -> dict[str, np.nda
 @PROBES.register
 def probe_shoot(impl: Any, i: int, F: list, areas: list, reflectance: list, radiosity: list, unshot: list
                 ) -> dict[str, np.ndarray]:
+    """R2 alone on a small system given whole: patch ``i`` shoots along row ``i`` of ``F``; the new radiosity and
+    unshot ``(n, 3)``, compared with the truth's shot."""
     F_ = np.asarray(F, dtype=np.float64)
     B, dB = call_shoot(impl, i, F_[i], np.asarray(areas, float), np.asarray(reflectance, float),
                   np.asarray(radiosity, float), np.asarray(unshot, float))
@@ -331,11 +345,14 @@ def probe_largest_first(impl: Any, tolerance: float, max_shots: int, overshoot: 
 
 @PROBES.register
 def probe_ambient(impl: Any, areas: list, reflectance: list, unshot: list) -> dict[str, np.ndarray]:
+    """R4 alone on given areas, reflectances and unshot radiosity: the ambient term ``(3,)``, against the truth's."""
     return {"ambient": call_ambient(impl, np.asarray(areas, float), np.asarray(reflectance, float), np.asarray(unshot, float))}
 
 
 @PROBES.register
 def probe_vertex_colors(impl: Any, quads: list, parent: list, radiosity: list) -> dict[str, np.ndarray]:
+    """R5 alone on given patches: the positions ``(k, 3)``, colours ``(k, 3)`` and corners ``(m, 4)``, for the
+    vertex tests."""
     positions, colors, corners = call_vertex_colors(impl, np.asarray(quads, float), np.asarray(parent, dtype=np.int64),
                                                np.asarray(radiosity, float))
     return {"positions": positions, "colors": colors, "corners": corners}
@@ -412,7 +429,9 @@ def patch_count(scene: Scene, patch_size: float) -> float:
 
 
 def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
-    from ...formfactors.reciprocity import MATRICES
+    """The memory a render needs, from the options alone: the patches R1's rule makes with their n × n form factors
+    (more matrices with reciprocity), and the hemicubes drawn at a time."""
+    from .reciprocity import MATRICES
     from ...limits import Cost
     from ..hemicube import hemicube_bytes
     opts = STAGE.options(scene)

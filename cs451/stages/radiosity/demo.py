@@ -1,12 +1,12 @@
 """Stage 4's demo: progressive refinement shot by shot, paused, stepped and started again, with the patch that just
 shot outlined and the energy left to shoot as a number and a bar.
 
-The shooting loop is the submission's own R3, run one shot at a time (:class:`cs451.demos.stepping.Stepper`: the
+The shooting loop is the submission's own R3, run one shot at a time (:class:`cs451.stages.radiosity.stepping.Stepper`: the
 loop in a thread, held at each ``on_shot``, its rows drawn by stage 3's hemicube engine in the demo's thread and
 context). What is drawn is the submission's too: R5's vertex colours, Gouraud-shaded (``g`` shows each patch flat,
 its own B, to see what R5's interpolation adds), plus ρ·ambient (R4) while the ambient preview is on (``a``), the
 notes' display of a solution in progress. The scene's exposure and encoding (sRGB for the Cornell box) are applied
-as the picture is drawn; a scene with glossy materials (``glossy-box``) shows their highlight (:mod:`cs451.specular`)
+as the picture is drawn; a scene with glossy materials (``glossy-box``) shows their highlight (:mod:`cs451.stages.radiosity.highlight`)
 in the Gouraud display, as ``cs451 render`` does.
 """
 from __future__ import annotations
@@ -20,11 +20,11 @@ from typing import Any, Callable, Iterator
 import numpy as np
 
 from ...demos.player import Event, Prepared, play
-from ...demos.stepping import Stepper
-from ...drawing import GouraudDrawer, camera_matrix, with_highlight
+from .display import GouraudDrawer, camera_matrix, flat_corners, with_highlight
 from ...imageio import to_uint8
 from ...scene import Scene, load_scene
-from ...solvers import energy
+from .solvers import energy
+from .stepping import Stepper
 from .. import radiosity as R
 
 #: The picture is drawn at least this tall (the scene's size times a whole factor): it is shown scaled to the screen.
@@ -118,13 +118,18 @@ class RadiosityDemo(Prepared):
 
     # --- the player's interface ---------------------------------------------------------------
     def frame_size(self) -> tuple[int, int]:
+        """(width, height): the picture, with the bar of energy left to shoot under it."""
         return self.width, self.height + self.bar
 
     def busy(self) -> bool:
+        """Whether there is work: the first frame not yet kept, or shots left while running, or shots asked for
+        (n) while paused."""
         self.ready()
         return self.reported < 0 or (not self.done and (not self.paused or self.wanted > 0))
 
     def handle(self, event: Event) -> None:
+        """Space pauses or resumes, n or → asks for one more shot (paused), r starts again, g toggles flat patches,
+        a the ambient preview; clicks do nothing."""
         self.ready()
         if event[0] != "key":
             return
@@ -182,6 +187,7 @@ class RadiosityDemo(Prepared):
         return self.B
 
     def frame(self) -> np.ndarray:
+        """The current picture, drawn once per change (a shot, a key) and kept until the next."""
         self.ready()
         if self._frame is None:
             self._frame = self._draw()
@@ -191,8 +197,7 @@ class RadiosityDemo(Prepared):
         from PIL import Image, ImageDraw
         p, values, shine = self.patches, self.display(), None
         if self.flat:
-            positions = p.quads.reshape(-1, 3)
-            colours, corners = np.repeat(values, 4, axis=0), np.arange(4 * len(p)).reshape(-1, 4)
+            positions, colours, corners = flat_corners(p.quads, p.parent, values)
         else:
             positions, colours, corners = self.calls.corner_colors(p.quads, p.parent, values)
             if self.gloss is not None:
@@ -222,6 +227,8 @@ class RadiosityDemo(Prepared):
         return [(float((x + 1) / 2 * self.width), float((1 - y) / 2 * self.height)) for x, y in ndc]
 
     def caption(self) -> str:
+        """Three lines: the scene and what is drawn; the last shot and the loop's state; the unshot energy against
+        R3's tolerance."""
         self.ready()
         p = self.patches
         state = "converged" if self.done else ("paused" if self.paused else "shooting")
@@ -241,6 +248,7 @@ class RadiosityDemo(Prepared):
                 [("key", "a")], [("key", "g")]]
 
     def close(self) -> None:
+        """Stop the shooting loop's thread, where one is running (:func:`demo` calls it once play ends)."""
         if self.stepper is not None:
             self.stepper.stop()
 

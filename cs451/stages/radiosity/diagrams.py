@@ -1,7 +1,7 @@
 """Stage 4's explanatory pictures for its handout (:mod:`cs451.packaging.diagrams` writes and checks them).
 
 The glossy box (``cs451/scenes/glossy-box.json``) drawn from one solve twice: the Gouraud display alone, and with
-the direct surface reflection of notes §2.3 added (:mod:`cs451.specular`), so the handout shows what the option
+the direct surface reflection of notes §2.3 added (:mod:`cs451.stages.radiosity.highlight`), so the handout shows what the option
 adds and that the radiosity under it is the same.
 """
 from __future__ import annotations

@@ -9,16 +9,15 @@ import numpy as np
 
 from ...progress import Progress
 from ...scene import parse_scene
-from ...solvers import energy
+from .solvers import energy
 from .. import get_stage
 from ...slides.records import declare_record
 from ...slides.registry import Drawn, slide_figure
 from ...slides.canvas import Panel, encoded, panel_grid, reference_impl, scene_data
-from ..hemicube.figures import flat_corners
 
 
-RADIOSITY_KIT = ("cs451.stages.radiosity", "cs451.stages.base", "cs451.solvers", "cs451.patching", "cs451.patches",
-                 "cs451.drawing", "cs451.viewing", "cs451.formfactors.rows", "cs451.formfactors.atlas",
+RADIOSITY_KIT = ("cs451.stages.radiosity", "cs451.stages.base", "cs451.stages.radiosity.solvers", "cs451.patching", "cs451.patches",
+                 "cs451.stages.radiosity.display", "cs451.viewing", "cs451.formfactors.rows", "cs451.formfactors.atlas",
                  "cs451.formfactors.geometry", "cs451.formfactors.proximity", "cs451.gl", "cs451.scene",
                  "cs451.imageio", "cs451.stages.hemicube.figures")
 
@@ -46,7 +45,7 @@ def _radiosity_image(scene: Any, system: dict[str, np.ndarray], display: np.ndar
                      flat: bool = False) -> np.ndarray:
     """Per-patch radiosities drawn as the stage draws them (radiance B/π, the scene's exposure and encoding), with
     R5's vertex colours (Gouraud) or each patch in its own value (``flat``)."""
-    from ...drawing import draw_solution
+    from .display import draw_solution, flat_corners
     stage, impl = get_stage("radiosity"), reference_impl("radiosity")
     corners = flat_corners if flat else (lambda quads, parent, values: stage.call(impl, "R5", quads, parent, values))
     patches = SimpleNamespace(quads=system["quads"], parent=system["parent"])
@@ -124,7 +123,7 @@ def first_below(points: list[dict[str, Any]], target: float) -> dict[str, Any] |
 
 declare_record("radiosity", "Solving the Cornell box (patches of 50): Gauss-Seidel on the full matrix against progressive "
                             "shooting in the handout's order and in the paper's largest-first order, error and unshot energy "
-                            "against time with the form factors charged", "radiosity")
+                            "against time with the form factors charged", f"{__package__}.bench_record")
 
 
 @slide_figure("bench-radiosity",

@@ -5,7 +5,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from ... import schema
-from ... import specular as glossy       # the module; `specular` is also an option below
+from . import highlight as glossy       # the module; `specular` is also an option below
 from ...schema import Context, field
 
 
@@ -31,19 +31,21 @@ class RadiosityOptions:
     # the grader's trusted form factors (probe_system) take this default too: see hemicube_formfactors
     reciprocity: bool = field(
         "Make the hemicube's rows reciprocal (A_i F_ij = A_j F_ji), keeping each row's sum, before solving "
-        "(cs451.formfactors.reciprocity): a uniform furnace is then uniform patch by patch, not only on average. "
+        "(cs451.stages.radiosity.reciprocity): a uniform furnace is then uniform patch by patch, not only on average. "
         "It needs every row, so the shooting loop runs on the whole matrix, computed first: n hemicubes where "
         "shooting renders only its shooters' rows, and 6 n × n arrays at the peak; the scaling takes 1 ms for 100 "
         "patches, 2 s for 2,400.", False)
     exposure: float = field("Multiplies the displayed radiance, before the scene's own exposure.", 1.0, schema.positive)
     specular: bool = field(
         "Add the direct surface reflection of the area lights (notes §2.3) to the display, per pixel, for materials "
-        "with a specular above 0 and a shininess above 0 (cs451.specular: a normalised Phong lobe, no shadows); "
+        "with a specular above 0 and a shininess above 0 (cs451.stages.radiosity.highlight: a normalised Phong lobe, no shadows); "
         "scenes without such a material are drawn exactly as with false. The solve is the same either way.", True)
     specular_samples: int = field("Points per edge of each area light for the highlight (a k × k grid).",
                                   glossy.DEFAULT_SAMPLES, glossy.check_samples)
 
     def validate(self, ctx: Context) -> None:
+        """Refuse, naming the field, an overshoot of 2 or more (shooting diverges) and a tolerance of 1 or more
+        (met before the first shot)."""
         if not self.overshoot < 2.0:
             raise ctx.child("overshoot").error(f"must be below 2 (shooting diverges from 2 on), got {self.overshoot}")
         if not self.tolerance < 1.0:

@@ -15,4 +15,6 @@ class ShotsSeen:
         self.last = np.array(radiosity, dtype=np.float64)
 
     def outputs(self) -> dict[str, np.ndarray]:
+        """What a probe returns of it: every call's (shots, i) as ``(k, 2) int``, and the radiosity at the last call
+        ``(n, 3)`` (NaN where no call came)."""
         return {"on_shot_calls": np.asarray(self.calls, dtype=np.int64).reshape(-1, 2), "on_shot_last": self.last}

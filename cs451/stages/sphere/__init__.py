@@ -269,6 +269,7 @@ PROBES = Probes()
 
 @PROBES.register
 def probe_perspective(impl: Any, fovy: float, aspect: float, near: float, far: float) -> dict[str, np.ndarray]:
+    """S1 alone: the projection matrix ``(4, 4)`` for the given frustum, compared with the truth's."""
     return {"matrix": _perspective(impl, fovy, aspect, near, far)}
 
 
@@ -282,16 +283,21 @@ def probe_stereo_projection(impl: Any, fovy: float, aspect: float, near: float, 
 
 @PROBES.register
 def probe_look_at(impl: Any, eye: list, center: list, up: list) -> dict[str, np.ndarray]:
+    """S2 alone: the view matrix ``(4, 4)`` for the given eye, centre and up, compared with the truth's."""
     return {"matrix": _look_at(impl, eye, center, up)}
 
 
 @PROBES.register
 def probe_model_view_matrices(impl: Any, view: list, calls: list) -> dict[str, np.ndarray]:
+    """S3 alone on a given view and list of modelview calls: a matrix per ``draw`` ``(k, 4, 4)``, compared
+    with the truth's."""
     return {"matrices": _model_views(impl, np.array(view, float), calls)}
 
 
 @PROBES.register
 def probe_sphere_mesh(impl: Any, radius: float, slices: int, stacks: int) -> dict[str, np.ndarray]:
+    """S4 alone: the mesh's positions ``(n, 3)``, normals ``(n, 3)`` and triangles ``(t, 3) int``, for the mesh
+    checks against freeglut's sphere."""
     positions, normals, triangles = _mesh(impl, radius, slices, stacks)
     return {"positions": positions, "normals": normals, "triangles": triangles}
 
@@ -394,6 +400,8 @@ MESH_CELL_BYTES = 256
 
 
 def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
+    """The memory a render needs, from the scene alone: the image, and the spheres' meshes, blamed on the sphere that
+    holds most of their cells where one does (else on ``objects``)."""
     from ...limits import Cost
     w, h = size or (scene.image.width, scene.image.height)
     costs = [Cost("image.width", 64.0 * w * h, f"a {w}x{h} image")]

@@ -48,6 +48,7 @@ TASKS = (
 
 
 def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
+    """The memory and time a render needs, from the scene and its options alone (:func:`.cost.estimate`)."""
     return cost.estimate(scene, size, STAGE.options(scene))
 
 
@@ -232,6 +233,8 @@ def _rays(value: Any, what: str) -> np.ndarray:
 
 @PROBES.register
 def probe_camera_rays(impl: Any, camera: dict, width: int, height: int) -> dict[str, np.ndarray]:
+    """W1 alone for a given camera: origins and directions ``(w·h, 3)``, checked for unit length and pyrender's
+    pixel centres."""
     cam = schema.parse_record(Camera, camera, Context("<probe>", "camera"))
     origins, directions = _camera_rays(impl, cam, width, height)
     return {"origins": origins, "directions": directions}
@@ -240,6 +243,8 @@ def probe_camera_rays(impl: Any, camera: dict, width: int, height: int) -> dict[
 @PROBES.register
 def probe_thin_lens(impl: Any, camera: dict, directions: list, aperture: float, focus: float, u: list
                     ) -> dict[str, np.ndarray]:
+    """W12 alone on given directions and lens samples ``u`` ``(n, 2)``: the new origins and directions ``(n, 3)``,
+    compared with the truth's."""
     cam = schema.parse_record(Camera, camera, Context("<probe>", "camera"))
     d = _rays(directions, "directions")
     origins, out = STAGE.call(impl, "W12", cam, d, float(aperture), float(focus), as_array(u, (len(d), 2), "u"))
@@ -248,6 +253,7 @@ def probe_thin_lens(impl: Any, camera: dict, directions: list, aperture: float, 
 
 @PROBES.register
 def probe_intersect_sphere(impl: Any, origins: list, directions: list, center: list, radius: float) -> dict[str, np.ndarray]:
+    """W2 alone on given rays and one sphere: both roots ``t0`` and ``t1`` ``(n,)``, inf on a miss."""
     o, d = _rays(origins, "origins"), _rays(directions, "directions")
     t0, t1 = STAGE.call(impl, "W2", o, d, np.asarray(center, float), float(radius))
     return {"t0": t0, "t1": t1}
@@ -255,6 +261,8 @@ def probe_intersect_sphere(impl: Any, origins: list, directions: list, center: l
 
 @PROBES.register
 def probe_intersect_triangle(impl: Any, origins: list, directions: list, v0: list, v1: list, v2: list) -> dict[str, np.ndarray]:
+    """W3 alone: ray k against triangle k (a single triangle given is repeated for every ray); ``t`` ``(n,)``, inf
+    on a miss, for the hit and the no-gap tests."""
     o, d = _rays(origins, "origins"), _rays(directions, "directions")
     tri = [np.broadcast_to(np.asarray(v, float), o.shape).copy() for v in (v0, v1, v2)]
     return {"t": STAGE.call(impl, "W3", o, d, *tri)}
@@ -339,6 +347,7 @@ def probe_closest_hit(impl: Any, scene: dict, size: list[int] | None = None, hie
 @PROBES.register
 def probe_local_shading(impl: Any, normals: list, to_eye: list, to_light: list, light_diffuse: list,
                         light_specular: list, diffuse: list, specular: list, shininess: list) -> dict[str, np.ndarray]:
+    """W6 alone on given vectors, lights and materials per point: the colour ``(n, 3)``, against the formula."""
     args = [np.asarray(a, dtype=np.float64) for a in (normals, to_eye, to_light, light_diffuse, light_specular,
                                                       diffuse, specular)]
     return {"colour": STAGE.call(impl, "W6", *args, np.asarray(shininess, dtype=np.float64))}
@@ -346,6 +355,8 @@ def probe_local_shading(impl: Any, normals: list, to_eye: list, to_light: list, 
 
 @PROBES.register
 def probe_shadow_transmission(impl: Any, scene: dict, origins: list, targets: list) -> dict[str, np.ndarray]:
+    """W7 alone in a given scene: the transmission ``(n, 3)`` from each origin to its target, and how many
+    shadow rays were cast."""
     ts = prepare(_scene(scene), impl)
     o, x = _rays(origins, "origins"), _rays(targets, "targets")
     out = STAGE.call(impl, "W7", ts, o, x)
@@ -354,12 +365,15 @@ def probe_shadow_transmission(impl: Any, scene: dict, origins: list, targets: li
 
 @PROBES.register
 def probe_reflect(impl: Any, directions: list, normals: list) -> dict[str, np.ndarray]:
+    """W8 alone: the reflected directions ``r`` ``(n, 3)`` of given directions and normals."""
     d, n = _rays(directions, "directions"), _rays(normals, "normals")
     return {"r": STAGE.call(impl, "W8", d, n)}
 
 
 @PROBES.register
 def probe_refract(impl: Any, directions: list, normals: list, eta: Any) -> dict[str, np.ndarray]:
+    """W9 alone: the refracted directions ``t`` ``(n, 3)`` (their shape checked here, which the task leaves open)
+    and the total internal reflection mask ``tir`` ``(n,)``."""
     d, n = _rays(directions, "directions"), _rays(normals, "normals")
     directions, tir = STAGE.call(impl, "W9", d, n, np.asarray(eta, dtype=np.float64))
     try:
@@ -373,6 +387,7 @@ def probe_refract(impl: Any, directions: list, normals: list, eta: Any) -> dict[
 
 @PROBES.register
 def probe_fresnel(impl: Any, cos_i: list, eta: Any) -> dict[str, np.ndarray]:
+    """W10 alone: the reflectance ``f`` ``(n,)`` for given cosines and ``eta``, against Fresnel's equations."""
     c = np.asarray(cos_i, dtype=np.float64)
     return {"f": STAGE.call(impl, "W10", c, np.asarray(eta, dtype=np.float64))}
 

@@ -179,13 +179,17 @@ class WhittedDemo(Prepared):
 
     # --- the player's interface ---------------------------------------------------------------
     def frame_size(self) -> tuple[int, int]:
+        """(width, height): the image with each pixel drawn as a ``zoom`` × ``zoom`` square, at least 640 wide."""
         return self.width * self.zoom, self.height * self.zoom
 
     def busy(self) -> bool:
+        """Whether the picture under the current setting still has pixels to trace."""
         self.ready()
         return self.render.pos < len(self.order)
 
     def handle(self, event: Event) -> None:
+        """A click shows that pixel's ray tree; s, r, t and c toggle shadows, reflection, refraction and the cut-off,
+        + and - move the depth limit (a tree shown is traced again under the new setting); x clears the tree."""
         self.ready()
         if event[0] == "click":
             x, y = int(event[1]) // self.zoom, int(event[2]) // self.zoom
@@ -205,6 +209,8 @@ class WhittedDemo(Prepared):
                 self.tree = self.ray_tree(*self.tree.pixel)
 
     def step(self, seconds: float) -> bool:
+        """Trace pieces of the current pass for about ``seconds``, each sized by :func:`next_piece`; True when a pass
+        ends (a frame worth keeping)."""
         self.ready()
         r, stop = self.render, time.perf_counter() + seconds
         while r.pos < len(self.order):
@@ -225,6 +231,7 @@ class WhittedDemo(Prepared):
         return False
 
     def frame(self) -> np.ndarray:
+        """The current picture, zoomed, with the ray tree drawn over it when one is shown; made once per change."""
         self.ready()
         if self._frame is None:
             r, z = self.render, self.zoom
@@ -236,6 +243,8 @@ class WhittedDemo(Prepared):
         return self._frame
 
     def caption(self) -> str:
+        """Six lines: the scene and how far it has refined, the switches, the rays cast by kind, the ray tree's
+        summary (or how to get one), and the legend."""
         self.ready()
         return "\n".join(self._caption())
 

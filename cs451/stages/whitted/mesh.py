@@ -32,6 +32,8 @@ def rippled_torus():
 
 
 def obj_text() -> str:
+    """The mesh as OBJ text, six decimals a coordinate: what ``rippled-torus.obj`` must hold (a test compares the
+    committed file with it)."""
     mesh = rippled_torus()
     lines = ["# rippled torus made by cs451/stages/whitted/mesh.py (do not edit)"]
     lines += [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in mesh.vertices]
@@ -40,6 +42,7 @@ def obj_text() -> str:
 
 
 def write(path: Path = TORUS_OBJ) -> Path:
+    """Write :func:`obj_text` to ``path`` (the bundled OBJ unless told) and return the path."""
     path.write_text(obj_text())
     return path
 

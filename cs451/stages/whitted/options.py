@@ -19,6 +19,8 @@ class WhittedOptions:
                                0, schema.between(0, MAX_LIGHT_SAMPLES, LIGHT_SAMPLES_WHY))
 
     def validate(self, ctx: Context) -> None:
+        """Refuse, naming the field, samples per pixel that are not a square (they lie on a k × k grid) and a
+        depth past MAX_DEPTH."""
         if math.isqrt(self.spp) ** 2 != self.spp:
             raise ctx.child("spp").error(f"must be a square number (1, 4, 9, 16, …), got {self.spp}")
         if self.max_depth > MAX_DEPTH:

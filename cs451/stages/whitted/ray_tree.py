@@ -84,9 +84,12 @@ class RayTree:
     counters: dict[str, int]                                 # W11's own counters for this one camera ray
 
     def count(self, kind: str) -> int:
+        """How many of the tree's rays are of ``kind`` (camera, reflection, refraction or ray), for the caption."""
         return sum(r.kind == kind for r in self.rays)
 
     def shadow_state(self, passed: float) -> str:
+        """A shadow ray by the light it lets through (max RGB): ``blocked`` at none, ``lit`` at all, ``dimmed``
+        between (its colour in the drawing)."""
         return "blocked" if passed <= 1e-9 else ("lit" if passed >= 1 - 1e-9 else "dimmed")
 
     def summary(self) -> list[str]:
@@ -144,6 +147,7 @@ class Pinhole:
         return clip_to_image(qa[:2] / qa[2] * scale, qb[:2] / qb[2] * scale, self.width, self.height)
 
     def point(self, p: np.ndarray) -> tuple[float, float] | None:
+        """World point ``p`` in image pixels (x right, y down), or None when it is not in front of the eye."""
         q = self.m @ (np.asarray(p, float) - self.eye)
         return (q[0] / q[2] * self.width, q[1] / q[2] * self.height) if q[2] > 0 else None
 

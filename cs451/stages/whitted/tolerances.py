@@ -14,7 +14,7 @@ FLOAT64_ATOL = Tolerance(1e-12, "the same for values that should be 0 (absolute)
 NDC = Tolerance(1e-6, "where a camera ray crosses the image plane, in normalised device coordinates: a pixel is 2/width "
                       "(~1e-2) wide, so a ray through a pixel's corner instead of its centre is off by ~5e-3")
 HITS = Tolerance(1e-6, "t and normals of closest hits against the reference's, and the normals' length: traversal order "
-                       "and the triangle formula change them by ~1e-12 (tests/test_whitted_robust.py measures 4e-14)")
+                       "and the triangle formula change them by ~1e-12 (tests/whitted/test_whitted_robust.py measures 4e-14)")
 SAME_PRIMITIVE = Tolerance(0.99, "the share of rays that must hit the reference's primitive: a ray through a shared edge or "
                                  "tangent to a sphere may rightly hit either side")
 DEPTH = Tolerance(5e-3, "a hit's depth against pyrender's depth buffer (relative): the buffer's 24 bits over the scene's "

@@ -9,8 +9,8 @@ and a wrapper hands a large batch to the compiled kernels and a small one to the
 These compiled paths give the images the reference gave when this code lived inside it, to the last bit.
 
 Instructor-side: no release and no grading sandbox holds this package (:func:`cs451.instructor_only`); where
-it is missing, the reference simply runs its numpy code. ``bench/whitted.py`` measures it against Embree and
-Mitsuba 3; ``tests/test_whitted_frame.py`` and ``tests/test_whitted_robust.py`` check it against the numpy path.
+it is missing, the reference simply runs its numpy code. ``cs451/stages/whitted/bench.py`` measures it against Embree and
+Mitsuba 3; ``tests/whitted/test_whitted_frame.py`` and ``tests/whitted/test_whitted_robust.py`` check it against the numpy path.
 """
 from __future__ import annotations
 

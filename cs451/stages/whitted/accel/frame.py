@@ -1,6 +1,6 @@
 """The reference's compiled W11: a whole frame's recursion in one kernel (``kernels.frame``), so that no
 per-bounce bookkeeping runs in numpy. ``tracer.trace`` hands large batches here; both give the same
-colours to rounding and the same counters (``tests/test_whitted_frame.py``). A student's starter has no copy of it.
+colours to rounding and the same counters (``tests/whitted/test_whitted_frame.py``). A student's starter has no copy of it.
 """
 from __future__ import annotations
 

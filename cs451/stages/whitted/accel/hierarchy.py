@@ -37,6 +37,8 @@ class GeometryCache:
         self._items: OrderedDict[str, Any] = OrderedDict()
 
     def get(self, key: str, make: Callable[[], Any]) -> Any:
+        """The value for ``key``: the kept one (counted as reused, now the most recent), else ``make()`` kept and
+        counted as built, the least recent dropped past ``size``."""
         if key in self._items:
             self._items.move_to_end(key)
             self.reused += 1
@@ -49,6 +51,7 @@ class GeometryCache:
         return value
 
     def clear(self) -> None:
+        """Forget every kept value (the counts stay), so that the next ``get`` of each key builds it again."""
         self._items.clear()
 
 

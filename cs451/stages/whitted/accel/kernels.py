@@ -4,7 +4,7 @@ whole Whitted frame (closest hit, shading, shadow rays and the recursion for eac
 Written per ray, in float64 (the hierarchy's boxes aside: tested in float32, widened by the test's error
 bound), and run on chunks of rays in threads (``nogil``, see ``running.py``).
 A clear numpy solution does not need this file: it is how the reference reaches Embree-like speeds
-(see ``bench/whitted.py``). The frame kernel lives here with the traversal it inlines because numba's
+(see ``cs451/stages/whitted/bench.py``). The frame kernel lives here with the traversal it inlines because numba's
 cache checks only the file a kernel is defined in. A student's starter has no copy of it.
 """
 from __future__ import annotations

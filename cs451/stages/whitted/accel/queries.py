@@ -18,7 +18,7 @@ LEAF_SIZE = 4
 
 def camera_frame(cam: Any, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
     """W1: the reference's arithmetic (gluLookAt's frame, rays through pixel centres), compiled; equal to the
-    numpy path's rays to the bit (tests/test_whitted_frame.py)."""
+    numpy path's rays to the bit (tests/whitted/test_whitted_frame.py)."""
     eye, center, up = (np.asarray(v, dtype=np.float64) for v in (cam.eye, cam.center, cam.up))
     forward = center - eye
     forward /= np.linalg.norm(forward)
