@@ -130,6 +130,11 @@ def watching_spawns(item: pytest.Item) -> Iterator[list[str]]:
 def check_spawns(item: pytest.Item) -> None:
     """Fail a test that started a process (in its set-up or its call) without the ``spawns`` marker."""
     started = STARTED.pop(item.nodeid, [])
+    listing = os.environ.get("CS451_LIST_SPAWNS")      # a file to list them in instead (marking the tests in bulk)
+    if started and listing and item.get_closest_marker(SPAWNS) is None:
+        with open(listing, "a") as out:
+            out.write(f"{item.nodeid}\t{started[0]}\n")
+        return
     if started and item.get_closest_marker(SPAWNS) is None:
         pytest.fail(f"{item.nodeid} starts processes ({started[0]}) but is not marked "
                     f"@pytest.mark.{SPAWNS} (tests/selection.py)", pytrace=False)

@@ -26,7 +26,6 @@ LISTS = (
     ("docs/lecturers.md", "the demos' table", r"^\| `(?P<name>\w+)` \| "),
     ("docs/lecturers.md", "the decks' table", r"^\| (?P<name>\w+) \| \d+ \| "),
     ("docs/stages.md", "a section per stage", r"^## Stage (?P<number>\d+): .*\(`(?P<name>\w+)`\)"),
-    ("docs/stages.md", "the extensions' table", r"^\| (?P<number>\d+) \| [A-Z](?P=number)\d* `"),
     ("docs/testing.md", "the tests' folders", r"^\| `tests/(?P<name>\w+)/` \|"),
 )
 
