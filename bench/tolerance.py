@@ -55,10 +55,9 @@ def main(output: Path, quick: bool = False) -> None:
         if not (KIT_ROOT / "autograder" / stage / "public.py").exists():
             continue
         reference = ReferenceAnswers(stage)
-        for test in load_tests(stage):
+        imaged = [t for t in load_tests(stage) if t.expected == "reference" and image_tolerance(t.check) is not None]
+        for test in imaged[:1] if quick else imaged:       # quick: a stage's first image test, to show it runs
             tol = image_tolerance(test.check)
-            if test.expected != "reference" or tol is None:
-                continue
             inputs = reference.get(test.given, test.params) if test.given else None
             base = reference.get(test.probe, test.params, inputs)["image"]
             for name, env in VARIANTS.items():

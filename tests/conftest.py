@@ -109,6 +109,27 @@ def reference_grade_of():
     return of
 
 
+@pytest.fixture(scope="session")
+def bench_run(tmp_path_factory):
+    """``bench_run(name)``: ``cs451 bench NAME --quick`` run once a session through the console script, in a clean
+    environment; returns (its output folder, the finished process). The benchmarks' smoke test and a stage's own tests
+    of its benchmark read the same run."""
+    import subprocess
+    import sys
+    runs: dict = {}
+
+    def run(name: str):
+        if name not in runs:
+            folder = tmp_path_factory.mktemp(f"bench-{name}")
+            home = folder / "home"
+            done = subprocess.run([str(Path(sys.executable).with_name("cs451")), "bench", name, "--quick", "-o",
+                                   str(folder / "out")], cwd=folder, env=clean_env(home, Path(sys.executable).parent),
+                                  capture_output=True, text=True, timeout=1800)
+            runs[name] = (folder / "out", done)
+        return runs[name]
+    return run
+
+
 @pytest.fixture(autouse=True)
 def speed_layers_choose_as_in_a_fresh_process():
     """A stage's speed layer runs every batch compiled once a large one has paid for the kernels: forget that

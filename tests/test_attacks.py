@@ -178,12 +178,14 @@ def assert_s1_fails(out: Outcome, fragment: str):
 
 # --- reading and writing what the grader keeps --------------------------------------------------
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("path", PATHS)
 def test01_the_kit_its_history_and_its_answers_are_out_of_reach(path, corpus, gradescope):
     targets = layout_secrets(gradescope) if path == "gradescope-uid" else secrets(gradescope)
     assert_blocked(graded(path, attack(corpus, f"reads-{path}", reaches(targets)), gradescope))
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("path", FAST_PATHS)
 def test02_nothing_the_grader_keeps_can_be_written(path, corpus, gradescope):
     kit = Path(gradescope[1]["CS451_HOME"])
@@ -196,6 +198,7 @@ def test02_nothing_the_grader_keeps_can_be_written(path, corpus, gradescope):
     assert not list((KIT_ROOT / "reference" / "sphere").glob("cs451-pwned"))
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("path", FAST_PATHS)
 def test03_a_private_submission_runs_as_the_sandbox_user_never_root(path, corpus, gradescope):
     code = "    import os\n    print('BLOCKED' if os.getuid() else 'LEAKED root')\n"
@@ -204,6 +207,7 @@ def test03_a_private_submission_runs_as_the_sandbox_user_never_root(path, corpus
 
 # --- uploads shaped to hurt ------------------------------------------------------------------------
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("path", FAST_PATHS)
 def test04_a_link_to_the_reference_is_not_followed(path, corpus, gradescope):
     folder = corpus / f"link-{path}"
@@ -217,6 +221,7 @@ def test04_a_link_to_the_reference_is_not_followed(path, corpus, gradescope):
     assert "no 'sphere' package" in out.summary + " ".join(out.messages.values()), (out.summary, out.messages)
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("path", ["local", "gradescope-bubblewrap"])
 def test05_links_fifos_and_devices_inside_the_upload_are_left_out_and_said(path, corpus, gradescope):
     folder = attack(corpus, f"oddfiles-{path}", reaches(["secret.txt", "zero", "dangling"]).replace(
@@ -232,6 +237,7 @@ def test05_links_fifos_and_devices_inside_the_upload_are_left_out_and_said(path,
         assert all(n in out.summary for n in ("secret.txt", "zero", "dangling", "pipe")), out.summary
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("path", ["local", "gradescope-bubblewrap"])
 def test06_a_deep_or_huge_upload_is_refused_with_the_reason(path, corpus, gradescope):
     deep = attack(corpus, f"deep-{path}")
@@ -269,6 +275,7 @@ WORKER_LEFTOVERS = {
 }
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("name", list(WORKER_LEFTOVERS))
 @pytest.mark.parametrize("path", ["local", "gradescope-bubblewrap", "gradescope-uid"])
 def test07_what_the_worker_leaves_fails_its_test_and_never_the_grader(path, name, corpus, gradescope):
@@ -276,6 +283,7 @@ def test07_what_the_worker_leaves_fails_its_test_and_never_the_grader(path, name
     assert_s1_fails(graded(path, attack(corpus, f"{name.replace(' ', '-')}-{path}", code), gradescope), fragment)
 
 
+@pytest.mark.spawns
 def test07b_without_cgroups_the_watchdog_caps_the_children_together(corpus, monkeypatch):
     monkeypatch.setenv("CS451_NO_CGROUP", "1")
     code, fragment = WORKER_LEFTOVERS["memory spread over four children"]
@@ -283,6 +291,7 @@ def test07b_without_cgroups_the_watchdog_caps_the_children_together(corpus, monk
     assert_s1_fails(out, "out of memory")
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("path", ["local", "gradescope-bubblewrap"])
 def test08_a_forged_interface_answer_and_a_deep_job_tree_do_not_crash_grading(path, corpus, gradescope):
     forged = ("import json as _j, os as _o\n"
@@ -309,6 +318,7 @@ def live_processes_with(marker: str) -> list[int]:
     return found
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("path", FAST_PATHS)
 def test09_no_daemon_outlives_grading(path, corpus, gradescope):
     marker = f"cs451-daemon-{uuid.uuid4().hex[:8]}"
@@ -320,6 +330,7 @@ def test09_no_daemon_outlives_grading(path, corpus, gradescope):
     assert live_processes_with(marker) == []
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("path", FAST_PATHS)
 def test10_nothing_one_test_leaves_in_shared_places_reaches_the_next(path, corpus, gradescope):
     code = ("    import glob, os\n"
@@ -333,6 +344,7 @@ def test10_nothing_one_test_leaves_in_shared_places_reaches_the_next(path, corpu
     assert not [p for d in ("/tmp", "/var/tmp", "/dev/shm") for p in Path(d).glob("cs451-leak-*")]
 
 
+@pytest.mark.spawns
 def test11_a_classmate_can_neither_read_nor_break_another(corpus):
     top = world_readable_dir("cs451-class-")
     honest = top / "class" / "alice" / "sphere"
@@ -351,6 +363,7 @@ def test11_a_classmate_can_neither_read_nor_break_another(corpus):
         shutil.rmtree(top, ignore_errors=True)
 
 
+@pytest.mark.spawns
 def test12_gradebook_cells_that_look_like_formulas_are_quoted(corpus, tmp_path):
     klass = world_readable_dir("cs451-class-")
     try:
@@ -364,6 +377,7 @@ def test12_gradebook_cells_that_look_like_formulas_are_quoted(corpus, tmp_path):
 
 # --- points from nothing, and from what a release ships --------------------------------------------
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("stage", stage_names())
 def test13_a_submission_that_does_nothing_scores_zero(stage):
     root = world_readable_dir("cs451-vacuous-")
@@ -374,6 +388,7 @@ def test13_a_submission_that_does_nothing_scores_zero(stage):
         shutil.rmtree(root, ignore_errors=True)
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("stage", ["sphere", pytest.param("whitted", marks=pytest.mark.slow),
                                    pytest.param("hemicube", marks=pytest.mark.slow), "radiosity"])
 def test14_a_submission_made_of_what_the_release_ships_scores_zero(stage):
@@ -387,6 +402,7 @@ def test14_a_submission_made_of_what_the_release_ships_scores_zero(stage):
         shutil.rmtree(top, ignore_errors=True)
 
 
+@pytest.mark.spawns
 def test15_a_huge_hierarchy_fails_at_once_by_its_size():
     """A million nodes for a thousand boxes: refused from the parameters, before any walk of the tree."""
     root = world_readable_dir("cs451-bvh-")
@@ -405,6 +421,7 @@ def test15_a_huge_hierarchy_fails_at_once_by_its_size():
         shutil.rmtree(root, ignore_errors=True)
 
 
+@pytest.mark.spawns
 def test16_without_isolation_a_kit_refuses_to_run_a_submission(corpus, monkeypatch):
     """The uid-only fallback on this checkout: its .git and reference are world-readable, so it must refuse."""
     monkeypatch.setenv("CS451_SANDBOX", "uid")
@@ -415,6 +432,7 @@ def test16_without_isolation_a_kit_refuses_to_run_a_submission(corpus, monkeypat
         grade("sphere", attack(corpus, "refused"), show_progress=False, tasks=["S1"])
 
 
+@pytest.mark.spawns
 def test17_a_grading_run_leaves_no_folder_behind(corpus, monkeypatch):
     """The run folder (staged upload, engine, job folders) goes when grading ends, even after a hostile test."""
     seen = []
@@ -429,6 +447,7 @@ def test17_a_grading_run_leaves_no_folder_behind(corpus, monkeypatch):
     assert seen and not [p for p in seen if p.exists()]
 
 
+@pytest.mark.spawns
 def test18_a_direct_solve_posing_as_progressive_refinement_earns_nothing_for_r3():
     """B from (I − ρF)B = E is the converged answer; the furnace and scene tests also ask for the shots that get there."""
     root = world_readable_dir("cs451-direct-")

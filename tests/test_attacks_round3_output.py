@@ -129,6 +129,7 @@ def radiosity_oracle(root: Path, pass_hidden_shot: bool, pass_hidden_grid: bool)
         pass_shot=pass_hidden_shot, pass_grid=pass_hidden_grid))
 
 
+@pytest.mark.spawns
 def test01_a_hidden_result_changes_nothing_a_student_sees_in_any_local_output():
     """R2.3 failing on purpose once added "R2 shoot() loses points in its own tests" to every visible R3 test and
     moved the top-level score 15 -> 12.5; the hidden grid case passing once gave visible edge case R1.3 its point."""
@@ -176,6 +177,7 @@ def sphere_oracle(root: Path, fail_hidden: bool) -> Path:
         hidden=[p["fovy"], p["aspect"], p["near"], p["far"]], fail=fail_hidden))
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("mode", ["bubblewrap", "uid"])
 def test02_on_gradescope_the_top_level_shows_nothing_of_a_hidden_result(gradescope, mode):
     """The zip's results.json once said 20 or 16 (S1 and S2) by whether hidden S1.3 passed; now it has no top-level
@@ -234,6 +236,7 @@ def assert_printable(where: str, text: str, *markers: str) -> None:
         assert f"{marker}\\x1b[2J\\x1b]0;owned\\x07\\u202e\\x9b" in text, f"{where}: {marker} not shown escaped"
 
 
+@pytest.mark.spawns
 def test03_escape_sequences_reach_no_terminal_file_or_page_of_the_kit(tmp_path):
     """`cs451 grade` from this kit: its table on the terminal, its results.json and its report."""
     top = world_readable_dir("cs451-escapes-")
@@ -252,6 +255,7 @@ def test03_escape_sequences_reach_no_terminal_file_or_page_of_the_kit(tmp_path):
         shutil.rmtree(top, ignore_errors=True)
 
 
+@pytest.mark.spawns
 def test04_escape_sequences_reach_no_gradebook_and_no_report_of_a_roster(tmp_path):
     """A roster whose student folder's own name carries them too."""
     top = world_readable_dir("cs451-escapes-")
@@ -269,6 +273,7 @@ def test04_escape_sequences_reach_no_gradebook_and_no_report_of_a_roster(tmp_pat
         shutil.rmtree(top, ignore_errors=True)
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("mode", ["bubblewrap", pytest.param("uid", marks=pytest.mark.slow)])
 def test05_escape_sequences_reach_no_gradescope_results(gradescope, mode):
     """The zip's run_autograder, in the layout its own setup.sh makes."""
@@ -282,6 +287,7 @@ def test05_escape_sequences_reach_no_gradescope_results(gradescope, mode):
         shutil.rmtree(top, ignore_errors=True)
 
 
+@pytest.mark.spawns
 def test06_escape_sequences_reach_no_classroom_step_output():
     """The student release's workflow, its grading and per-task commands run as written (the kit's Python in place
     of the release's set-up .venv): what each step prints, and the results and report it keeps."""
@@ -366,6 +372,7 @@ def graded_with_peak(folder: Path) -> dict:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
+@pytest.mark.spawns
 def test08_a_huge_answer_costs_the_grader_no_more_than_the_limit_two_tests_at_once():
     """Every test's answer huge. The old reader took the whole file, then each array's bytes and a copy, and the
     grader kept every answer until the end. Now an answer over the limit is refused from its headers, unread, and
@@ -389,6 +396,7 @@ def test08_a_huge_answer_costs_the_grader_no_more_than_the_limit_two_tests_at_on
         shutil.rmtree(top, ignore_errors=True)
 
 
+@pytest.mark.spawns
 def test09_on_gradescope_a_huge_answer_stays_well_inside_its_768_mb(gradescope):
     """The zip's run_autograder, one test at a time as on Gradescope: the whole process tree (grader, sandbox and
     worker), sampled, stays well under Gradescope's default 768 MB with every answer just under the limit."""

@@ -193,6 +193,7 @@ def assert_nothing_stolen(printed: str, radiosity_score: float, root: Path, whol
 
 # --- the layouts ------------------------------------------------------------------------------------
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("path", ["local", pytest.param("roster", marks=pytest.mark.slow)])
 def test01_locally_and_in_a_roster_the_radiosity_worker_finds_no_hemicube_code(path):
     root = world_readable_dir("cs451-looter-")
@@ -221,6 +222,7 @@ def radiosity_gradescope(request) -> tuple[Path, dict]:
     return setup_like_gradescope(build_gradescope("radiosity", top / "autograder.zip"), top, sys.prefix)
 
 
+@pytest.mark.spawns
 @pytest.mark.slow
 @pytest.mark.parametrize("mode", ["bubblewrap", "uid"])
 def test02_on_gradescope_the_radiosity_worker_finds_no_hemicube_code(mode, radiosity_gradescope):
@@ -247,6 +249,7 @@ ANSWER_FILES = ("truth.py", "hidden.py", "public.py")
 KIT_FOLDERS = {"reference", "autograder", "starter", "answers", "tests", "bench"}
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("stage", stage_names())
 def test03_the_engine_a_worker_imports_holds_no_reference_no_tests_and_no_answers(stage):
     """The sandbox's copy of the engine (``/kit`` under bubblewrap), as built for a grading run of each stage."""

@@ -214,6 +214,7 @@ def test03_the_edge_cases_stay_edge_cases():
 
 # --- the replay, before (the self-check) and after (every server path) -----------------------------------
 
+@pytest.mark.spawns
 def test04_the_replay_scores_in_the_self_check_and_nothing_in_the_kit(workspace):
     """Sphere in the fast suite: the replay earns most public points in the student's own self-check (the shipped
     cases: that is not a grade) and none where the kit grades, whose tests each name their fresh case."""
@@ -227,6 +228,7 @@ def test04_the_replay_scores_in_the_self_check_and_nothing_in_the_kit(workspace)
     assert_fresh(kit)
 
 
+@pytest.mark.spawns
 @pytest.mark.slow
 def test04b_in_a_roster_the_replay_scores_nothing_beside_an_honest_classmate_s_full_marks(workspace):
     submission = replayer("sphere", release_of(workspace, "sphere"), workspace / "replay-roster")
@@ -245,6 +247,7 @@ def test04b_in_a_roster_the_replay_scores_nothing_beside_an_honest_classmate_s_f
         shutil.rmtree(top, ignore_errors=True)
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("mode", ["bubblewrap", pytest.param("uid", marks=pytest.mark.slow)])
 def test05_the_replay_scores_nothing_through_the_gradescope_zip(mode, workspace, gradescope):
     """The zip's own setup.sh made a secret of its own (private to root) and warmed the fresh cases' answers: the
@@ -263,6 +266,7 @@ def test05_the_replay_scores_nothing_through_the_gradescope_zip(mode, workspace,
 SLOW_STAGES = [pytest.param(s, marks=pytest.mark.slow) for s in ("whitted", "hemicube", "radiosity")]
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("stage", SLOW_STAGES)
 def test06_every_stage_s_replay_scores_nothing_where_the_kit_grades(stage, workspace):
     release = release_of(workspace, stage)
@@ -274,6 +278,7 @@ def test06_every_stage_s_replay_scores_nothing_where_the_kit_grades(stage, works
         assert_fresh(path)
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("stage", SLOW_STAGES)
 def test07_every_stage_s_replay_scores_nothing_through_its_own_gradescope_zip(stage, workspace):
     from cs451.packaging.gradescope import build_gradescope, setup_like_gradescope
@@ -307,6 +312,7 @@ def _results(result) -> dict:
     return to_gradescope(result)
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("stage", ["sphere", *SLOW_STAGES])
 def test08_a_planted_bug_loses_the_same_tasks_on_the_fresh_cases(stage, make_submission):
     """The self-check (shipped cases) and the kit's grading (fresh cases) find the same tasks at fault; the fresh
@@ -352,6 +358,7 @@ def test09_the_vetted_hemicube_cases_stay_as_close_to_their_closed_forms_as_the_
     assert not far, far
 
 
+@pytest.mark.spawns
 def test10_graders_starting_together_share_one_whole_secret(tmp_path):
     """A roster's graders may all ask for the secret at once: each gets the same one, never a half-written file."""
     from concurrent.futures import ProcessPoolExecutor

@@ -89,6 +89,7 @@ def stray_copies(gradescope):
     shutil.rmtree(kit, ignore_errors=True)
 
 
+@pytest.mark.spawns
 def test01_a_readable_copy_of_the_kit_stops_the_uid_fallback_before_any_code_runs(corpus, gradescope, stray_copies):
     """Before: the borrower printed LEAKED and scored 20/20 (S1, S2) through the build folder. After: the canary finds
     the copy and nothing is run."""
@@ -98,6 +99,7 @@ def test01_a_readable_copy_of_the_kit_stops_the_uid_fallback_before_any_code_run
     assert str(stray_copies[0]) in out.summary
 
 
+@pytest.mark.spawns
 def test02_under_bubblewrap_the_host_copies_are_not_there(corpus, gradescope, stray_copies):
     """Bubblewrap shows an allow-list (system folders, the Python environment, the engine, the upload, the job):
     no host /tmp, so the same copies are out of sight, the borrower gets nothing and the reference keeps full marks."""
@@ -108,6 +110,7 @@ def test02_under_bubblewrap_the_host_copies_are_not_there(corpus, gradescope, st
     assert honest.points == {"S1": 10, "S2": 10}, honest.messages
 
 
+@pytest.mark.spawns
 def test03_the_kit_s_own_builds_leave_nothing_readable(tmp_path):
     """The autograder zip is private to its maker (even over an older, readable file, under umask 0); building the
     wheel's folders (setup.py) happens in a private temporary folder that is gone afterwards."""
@@ -217,6 +220,7 @@ def channel_reports(data: dict) -> list[tuple[float, bool, str]]:
     return sorted(found)
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("mode", ["bubblewrap", pytest.param("uid", marks=pytest.mark.slow)])
 def test05_a_hidden_test_s_parameters_never_reach_a_visible_test(mode, corpus, gradescope):
     """Before (Gradescope layout, bubblewrap): S1.2 received S1.1's parameters, and the visible S2.1, run right after
@@ -266,6 +270,7 @@ def written(printed: str) -> dict[str, int]:
     return held
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("path", ["local", "local-watch", "gradescope-bubblewrap",
                                   pytest.param("gradescope-uid", marks=pytest.mark.slow)])
 def test06_a_test_cannot_fill_the_grader_s_disk(path, corpus, gradescope, monkeypatch):
@@ -287,6 +292,7 @@ def test06_a_test_cannot_fill_the_grader_s_disk(path, corpus, gradescope, monkey
     assert out.points.get("S2") == 10, out.messages
 
 
+@pytest.mark.spawns
 def test07_each_submission_s_tests_share_the_cpu_with_the_same_weight(corpus):
     """Two submissions graded at once each get a CPU share of their own with the same weight, and every process a
     test starts is in its submission's share, whatever sessions it makes (cs451 bench fair_share measures what it
@@ -329,6 +335,7 @@ def _cmdline(pid: int) -> bytes:
         return b""
 
 
+@pytest.mark.spawns
 def test08_a_roster_under_the_uid_fallback_refuses_beside_a_readable_copy(corpus, gradescope):
     """The roster's path, from a kit kept private (the Gradescope layout's, as ``setup.sh`` left it) with the class
     and grades private too, as the uid fallback needs. Before: the borrower scored 10/10 on S1 through a

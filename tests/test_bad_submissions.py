@@ -88,11 +88,13 @@ def run_case(root: Path, name: str, code: str, fraction: float, fragment: str):
     return result
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("name", list(CASES))
 def test01_bad_submission_is_scored_fairly(corpus_dir, name):
     run_case(corpus_dir, name, *CASES[name])
 
 
+@pytest.mark.spawns
 def test03_missing_function_and_wrong_signature_are_named(corpus_dir):
     folder = make_case(corpus_dir, "missing", CORRECT_TAIL)
     init = folder / "sphere" / "__init__.py"

@@ -8,16 +8,12 @@ from __future__ import annotations
 
 import importlib.util
 import json
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
 from cs451 import KIT_ROOT
 from cs451.bench import benches, bench_module
 
-CS451 = Path(sys.executable).with_name("cs451")
 
 
 def _cases() -> list:
@@ -27,18 +23,17 @@ def _cases() -> list:
 
 @pytest.mark.spawns
 @pytest.mark.parametrize("name", _cases())
-def test_every_benchmark_runs_quick_and_writes_what_is_read(name: str, tmp_path: Path) -> None:
+def test_every_benchmark_runs_quick_and_writes_what_is_read(name: str, bench_run) -> None:
     module = bench_module(name)
     keys = getattr(module, "KEYS", None)
     assert keys, f"{benches()[name].path}: no KEYS (the keys of {name}.json that docs and decks read)"
     for peer in getattr(module, "NEEDS", ()):
         if importlib.util.find_spec(peer) is None:
             pytest.skip(f"bench {name} needs {peer}, an optional peer (pip install -e '.[peers]')")
-    done = subprocess.run([str(CS451), "bench", name, "--quick", "-o", str(tmp_path)], cwd=tmp_path,
-                          capture_output=True, text=True, timeout=1800)
+    folder, done = bench_run(name)
     assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-3000:]
-    written = tmp_path / f"{name}.json"
-    assert written.is_file(), sorted(p.name for p in tmp_path.iterdir())
+    written = folder / f"{name}.json"
+    assert written.is_file(), sorted(p.name for p in folder.iterdir())
     data = json.loads(written.read_text())
     for row in data if isinstance(data, list) else [data]:          # a list: each row holds the keys
         assert isinstance(row, dict) and set(keys) <= set(row), f"{name}.json lacks {sorted(set(keys) - set(row))}"

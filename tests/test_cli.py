@@ -16,6 +16,7 @@ def cs451(*args, env=None):
     return subprocess.run([sys.executable, "-m", "cs451.cli", *args], capture_output=True, text=True, env=env)
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("command", ["render", "grade", "compare", "figures", "starter", "demo", "scenes", "bench"])
 def test01_every_subcommand_has_help(command):
     proc = cs451(command, "--help")
@@ -35,11 +36,13 @@ def test02_render_writes_the_sphere(tmp_path):
     assert load_png(small).shape == (200, 320, 3)
 
 
+@pytest.mark.spawns
 def test03_render_with_the_starter_says_what_to_do(tmp_path):
     proc = cs451("render", "sphere", "-o", str(tmp_path / "x.png"), "--impl", "starter")
     assert proc.returncode == 2 and "not implemented yet" in proc.stderr and "Traceback" not in proc.stderr
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("args, message", [
     (["render", "sphere", "-o", "x.png", "--size", "big"], "--size: expected WIDTHxHEIGHT"),
     (["render", "sphere", "-o", "x.png", "--impl", "/no/such/folder"], "submission folder not found"),
@@ -50,10 +53,12 @@ def test04_bad_arguments_get_one_line(args, message, tmp_path):
     assert proc.returncode == 2 and message in proc.stderr and proc.stderr.count("\n") == 1
 
 
+@pytest.mark.spawns
 def test05_starter_check_passes():
     assert cs451("starter", "--check").returncode == 0
 
 
+@pytest.mark.spawns
 def test06_demo_without_a_display_writes_images(tmp_path):
     env = {k: v for k, v in __import__("os").environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
     proc = cs451("demo", "sphere", "-o", str(tmp_path), env=env)
@@ -64,11 +69,13 @@ def test06_demo_without_a_display_writes_images(tmp_path):
     assert load_png(tmp_path / "sphere-wide.png").shape == (400, 800, 3)
 
 
+@pytest.mark.spawns
 def test07_parser_lists_the_stages():
     assert "sphere" in build_parser()._subparsers._group_actions[0].choices["render"].format_help()
     assert any(line.startswith("sphere") for line in cs451("scenes").stdout.splitlines())
 
 
+@pytest.mark.spawns
 def test_compare_puts_a_render_beside_its_target_and_judges_it_as_the_tests_do(tmp_path):
     from cs451.imageio import load_png
     target = KIT_ROOT / "assignments" / "01-sphere" / "figures" / "S5.1.png"
@@ -82,6 +89,7 @@ def test_compare_puts_a_render_beside_its_target_and_judges_it_as_the_tests_do(t
     assert done.returncode == 2 and done.stderr.count("\n") == 1 and "--size 320x240" in done.stderr
 
 
+@pytest.mark.spawns
 def test_bench_sphere_writes_its_table_and_the_plot_the_readme_promises(tmp_path):
     done = cs451("bench", "sphere", "--quick", "-o", str(tmp_path))
     assert done.returncode == 0, done.stderr[-1500:]

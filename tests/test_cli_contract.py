@@ -363,6 +363,7 @@ def test_quiet_shows_no_bar(capsys):
     assert stream.getvalue() == ""
 
 
+@pytest.mark.spawns
 def test_grading_starts_its_bar_before_it_loads_tests_answers_or_a_sandbox(monkeypatch):
     """The seconds before the first test (loading tests, the reference's answers, the sandbox) are under the bar."""
     from cs451.grading import runner

@@ -89,6 +89,7 @@ def test03_a_composed_frame_is_the_picture_the_band_and_the_help_where_help_rect
     assert changed[0].min() >= y and changed[0].max() < y + h and changed[1].min() >= x and changed[1].max() < x + w
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("stage, scene, able", [("sphere", "whitted", "whitted"), ("radiosity", "orrery", "sphere"),
                                                 ("hemicube", "rippled-torus", "whitted")])
 def test04_a_scene_the_demo_cannot_draw_is_one_line_naming_the_demos_that_can(stage, scene, able, tmp_path):
@@ -98,6 +99,7 @@ def test04_a_scene_the_demo_cannot_draw_is_one_line_naming_the_demos_that_can(st
     assert done.stderr.strip().endswith(f"the demos that can: {able}"), done.stderr
 
 
+@pytest.mark.spawns
 def test05_the_help_lists_every_key_and_the_windows_own():
     for stage in stage_names():
         keys = [k for k, _ in help_keys(stage)]
@@ -142,6 +144,7 @@ LIVE = textwrap.dedent("""
 """)
 
 
+@pytest.mark.spawns
 @needs_xvfb
 def test06_f_goes_full_screen_and_back_and_the_picture_keeps_its_shape_at_any_size(tmp_path, monkeypatch):
     monkeypatch.setattr("demo_windows.XVFB", ["xvfb-run", "-a", "-s", "-screen 0 1920x1080x24"])

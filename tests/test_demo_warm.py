@@ -58,6 +58,7 @@ def test_the_warm_step_compiles_every_kernel_signature_the_whitted_demo_runs(sig
         assert sig in {key[0] for key in index}, f"{kernel.py_func.__name__}{sig} is not in numba's cache"
 
 
+@pytest.mark.spawns
 def test_no_other_demo_loads_numba(tmp_path):
     import subprocess
     import sys

@@ -9,6 +9,7 @@ from cs451.packaging.release import build_release
 from cs451.stages import get_stage, stage_names
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("stage", stage_names())
 def test_the_handout_figures_are_in_step_with_the_reference(stage):
     assert check_figures(stage) == [], "run `cs451 figures` to regenerate them"
@@ -64,6 +65,7 @@ def test_the_handout_diagrams_are_in_step_ship_and_a_changed_one_is_drift(tmp_pa
                                           f"reference's render"]
 
 
+@pytest.mark.spawns
 def test_a_figure_drawn_with_render_figure_matches_it_and_the_starter_says_what_is_missing(tmp_path):
     """The handout's recipe: `cs451 render --figure` draws the figure's own test (S5.3's lights and S6.2's coarse
     sphere are in no bundled scene; R5.6's patch size and resolution are the test's), and compare judges it."""

@@ -111,6 +111,7 @@ OPTIONS = {"render": ["--impl", "--size", "--stage", "--shading", "-o"], "grade"
            "scenes": [], "release": ["-o"]}
 
 
+@pytest.mark.spawns
 def test_bad_command_lines_end_in_one_line_and_exit_2(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     rng = random.Random(7)

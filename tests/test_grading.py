@@ -40,6 +40,7 @@ def test01_tests_are_declared_with_points_visibility_and_tolerance():
 #: each broken task is graded beside the tasks whose tests draw or call what it computes (the matrices feed the
 #: shader images and reshape, the mesh the shaders, the shaders each other); that a stubbed task costs no other
 #: task anything, over every task of every stage, is the slow contract test (tests/test_stage_contract.py)
+@pytest.mark.spawns
 @pytest.mark.parametrize("file, old, new, task, consumers", [
     ("camera.py", "s, u, -f", "s, u, f", "S2", ["S5", "S7"]),                      # look_at: forward not negated
     ("mesh.py", "phi = -2.0 * np.pi", "phi = 2.0 * np.pi", "S4", ["S5", "S6"]),    # mesh wound clockwise
@@ -62,6 +63,7 @@ def test04_one_broken_function_loses_only_its_task(make_submission, reference_gr
     assert {k: v for k, v in got.items() if k != task} == {k: full[k] for k in consumers}
 
 
+@pytest.mark.spawns
 def test05_a_submission_that_does_not_import_gets_zero_and_the_reason(make_submission):
     root = make_submission("sphere", "camera.py", "def perspective(", "def perspective(:")
     result = grade("sphere", root, show_progress=False)
@@ -69,6 +71,7 @@ def test05_a_submission_that_does_not_import_gets_zero_and_the_reason(make_submi
     assert "syntax error" in result.results[0].verdict.message and "camera.py" in result.results[0].verdict.message
 
 
+@pytest.mark.spawns
 def test06_wrong_shape_and_nan_are_scored_with_a_message(make_submission):
     root = make_submission("sphere", "camera.py", "    return rotation @ translation", "    return (rotation @ translation)[:3]")
     result = grade("sphere", root, show_progress=False, tasks=["S2"])
@@ -93,6 +96,7 @@ def test07_results_json_follows_gradescope_and_report_shows_images(reference_gra
     assert to_gradescope(reference_grade)["tests"][0]["status"] == "passed"
 
 
+@pytest.mark.spawns
 def test08_only_the_word_reference_is_trusted_and_grading_leaves_the_kit_as_it_was(kit_root):
     """A path that leads to the reference is a submission like any other: sandboxed, not a self-test."""
     watched = [kit_root, kit_root / "reference", kit_root / "autograder", kit_root / ".cs451-cache"]
@@ -145,6 +149,7 @@ def test10_shader_errors_name_the_shader_and_count_the_students_own_lines():
         SphereRenderer(ctx, (vertex, fragment.replace("void main()", "void mane()")), [], "S6")
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("zero_height_viewport, full", [("(0, 0, width, 0)", True), ("(0, 0, width, 2)", False),
                                                         ("(0, 0, 0, 0)", False)])
 def test11_a_zero_height_window_may_keep_viewport_height_0_or_1(make_submission, reference_grade,
@@ -171,6 +176,7 @@ def test11_a_zero_height_window_may_keep_viewport_height_0_or_1(make_submission,
                    for r in lost for w in [r.test.params["width"]])   # the public test's width is a fresh case's
 
 
+@pytest.mark.spawns
 @pytest.mark.skipif(not hasattr(os, "geteuid") or os.geteuid() != 0, reason="as root the tests run as a throwaway user")
 def test12_as_root_a_python_behind_a_private_folder_is_named_with_the_fix():
     """Root grading with its Python environment under a 0700 folder (a repository in /root, say): the sandbox's

@@ -63,6 +63,7 @@ def run_measured(args: list[str], cwd: Path) -> tuple[int, str, int]:
     return done.returncode, "\n".join(lines[:-1]), int(lines[-1].split()[1])
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("scene, change, extra, field", CASES, ids=[c[3] for c in CASES])
 def test_a_scene_asking_too_much_is_refused_at_once(scene, change, extra, field, tmp_path):
     path = variant(tmp_path, scene, change)
@@ -73,6 +74,7 @@ def test_a_scene_asking_too_much_is_refused_at_once(scene, change, extra, field,
     assert not (tmp_path / "out.png").exists()
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("args, names", COMMANDS, ids=[" ".join(c[0][:4]) for c in COMMANDS])
 def test_a_bad_command_line_is_one_line(args, names, tmp_path):
     code, err, _ = run_measured(args, tmp_path)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import ast
 
+import pytest
+
 import bench.mutation as mutation
 from bench.mutation import GraderFailed, apply, mutants_of, stage_mutants, task_score
 
@@ -55,6 +57,7 @@ def test03_the_reference_has_mutants_in_every_task_with_code():
     assert tasks == {t.id for t in get_stage("radiosity").tasks}    # R7, the optional extension, included
 
 
+@pytest.mark.spawns
 def test03b_a_mistake_in_an_optional_extension_loses_its_points_though_the_grade_holds_none(tmp_path):
     """R7 (optional) with its overshoot dropped: its points travel in results.json's extra_data, not its score."""
     mutant = next(m for m in stage_mutants("radiosity")
@@ -63,6 +66,7 @@ def test03b_a_mistake_in_an_optional_extension_loses_its_points_though_the_grade
     assert full == 5 and got < full
 
 
+@pytest.mark.spawns
 def test04_a_planted_mistake_loses_its_tasks_points(tmp_path):
     """R2 with the area ratio inverted (A_i / A_j becomes A_i * A_j) scores below full marks on R2."""
     mutant = next(m for m in stage_mutants("radiosity") if m.task == "R2" and m.kind == "operator" and m.before == "/")

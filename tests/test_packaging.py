@@ -66,6 +66,7 @@ def test01_setup_moves_the_kit_out_of_reach_and_leaves_source_empty(gradescope):
     assert "libegl-mesa0" in setup and "bubblewrap" in setup and f"autograder warm {STAGE}" in setup
 
 
+@pytest.mark.spawns
 def test02_reference_upload_gets_full_marks_with_gradescope_fields(gradescope):
     results = run_autograder(gradescope, KIT_ROOT / "reference")  # an upload holding the sphere/ folder
     assert total_score(results) == pytest.approx(100)
@@ -76,6 +77,7 @@ def test02_reference_upload_gets_full_marks_with_gradescope_fields(gradescope):
     assert {"score", "max_score", "name", "number", "output", "tags"} <= set(results["tests"][0])
 
 
+@pytest.mark.spawns
 def test03_starter_files_uploaded_loose_get_zero_with_hints(gradescope):
     loose = world_readable_dir("cs451-upload-")
     for f in (KIT_ROOT / "starter" / STAGE).glob("*.py"):
@@ -86,6 +88,7 @@ def test03_starter_files_uploaded_loose_get_zero_with_hints(gradescope):
     assert all("not implemented yet" in t["output"] for t in results["tests"])
 
 
+@pytest.mark.spawns
 def test04_a_whole_repository_upload_is_found_and_an_empty_one_is_explained(gradescope):
     repo = world_readable_dir("cs451-upload-")
     shutil.copytree(KIT_ROOT / "reference" / STAGE, repo / "my-repo" / "starter" / STAGE)
@@ -98,6 +101,7 @@ def test04_a_whole_repository_upload_is_found_and_an_empty_one_is_explained(grad
         str(gradescope[0]), "/autograder")
 
 
+@pytest.mark.spawns
 @pytest.mark.skipif(os.geteuid() != 0, reason="Gradescope runs as root; its sandbox user needs it")
 def test04b_a_submission_cannot_write_the_results(gradescope):
     upload = world_readable_dir("cs451-upload-")
@@ -155,6 +159,7 @@ def run_workflow(release: Path) -> list[int]:
     return codes
 
 
+@pytest.mark.spawns
 def test06_the_workflow_grades_the_starter_zero_and_a_solution_full(release):
     text = (release / ".github" / "workflows" / "classroom.yml").read_text()
     assert "python -m" not in text and workflow_commands(release / ".github" / "workflows" / "classroom.yml")[1] \
@@ -179,6 +184,7 @@ def test07_workflow_points_add_up_to_the_public_tests(release):
     assert text.count("_RESULTS:") == 8
 
 
+@pytest.mark.spawns
 @pytest.mark.skipif(shutil.which("git") is None, reason="needs git")
 def test08_git_keeps_every_file_of_the_release_and_ignores_only_what_its_commands_write(tmp_path):
     """A student commits the release as it is (`git add -A`): every file it ships is kept (the handout's figures

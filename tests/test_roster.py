@@ -45,6 +45,7 @@ def check_gradebook(out, n):
     return scores
 
 
+@pytest.mark.spawns
 def test01_small_roster(tmp_path):
     make_roster(tmp_path / "class", 4)
     out = tmp_path / "grades"
@@ -54,6 +55,7 @@ def test01_small_roster(tmp_path):
     assert (out / "student00" / "report.html").exists()
 
 
+@pytest.mark.spawns
 @pytest.mark.slow
 def test02_roster_of_twenty(tmp_path):
     make_roster(tmp_path / "class", 20)

@@ -88,6 +88,7 @@ def test05_nan_and_invalid_json_are_refused(tmp_path):
         load_scene("no-such-scene")
 
 
+@pytest.mark.spawns
 def test06_cli_prints_one_line_without_traceback(tmp_path):
     path = tmp_path / "bad.json"
     path.write_text(json.dumps(bad(objects__0__radius=-2)))

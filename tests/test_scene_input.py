@@ -124,6 +124,7 @@ def assert_one_line(code: int, err: str, peak: int, expected: str) -> None:
     assert peak < PEAK_KB, f"peak {peak} KB"
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("case", sorted(SCENES))
 def test_a_mistaken_scene_is_refused_in_one_line_naming_the_field(case, tmp_path):
     data, stage, expected = SCENES[case]
@@ -135,6 +136,7 @@ def test_a_mistaken_scene_is_refused_in_one_line_naming_the_field(case, tmp_path
     assert not (tmp_path / "out.png").exists()
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("kind", ["fifo", "dev-zero", "folder", "dangling", "oversized"])
 def test_a_scene_path_that_is_no_scene_file_is_named_for_what_it_is(kind, tmp_path):
     path, expected = write_special(tmp_path, kind)
@@ -161,6 +163,7 @@ OBJ = {   # the mesh file's text, and what the message must say
 }
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("name", sorted(OBJ))
 def test_a_bad_obj_file_is_refused_with_its_line(name, tmp_path):
     text, expected = OBJ[name]

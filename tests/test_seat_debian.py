@@ -28,7 +28,7 @@ from seats.debian import fresh_machine, missing_tools
 from seats.measured import FOLDER, record
 from test_containers import readme_commands
 
-pytestmark = [pytest.mark.seat, pytest.mark.skipif(missing_tools() is not None, reason=str(missing_tools()))]
+pytestmark = [pytest.mark.seat, pytest.mark.spawns, pytest.mark.skipif(missing_tools() is not None, reason=str(missing_tools()))]
 
 KIT = "/root/cs451-kit"
 #: What first use announces when it compiles (cs451/stages/whitted/accel/running.py): after set-up, nothing may.

@@ -41,6 +41,7 @@ def run_without(command: list[str], home: Path, hide: list[Path] | None = None, 
     return subprocess.run(wrapped, cwd=KIT_ROOT, env=env, capture_output=True, text=True, timeout=timeout)
 
 
+@pytest.mark.spawns
 def test_the_hidden_set_is_what_a_server_without_x_lacks(tmp_path):
     names = {p.name for p in hidden_libraries()}
     assert {"libGL.so.1", "libGLX.so.0", "libXrender.so.1"} & names, sorted(names)
@@ -51,6 +52,7 @@ def test_the_hidden_set_is_what_a_server_without_x_lacks(tmp_path):
     assert done.returncode == 0 and done.stdout.strip() == "", done.stdout + done.stderr
 
 
+@pytest.mark.spawns
 def test_a_missing_gl_library_is_named_in_one_line_with_its_package(tmp_path):
     # libOpenGL.so.0, and the libGL names the loaders fall back to (libGL.so from a -dev package, libGL.so.1)
     gl = [p for d in LIBRARY_DIRS if d.is_dir() for pattern in (LINUX_LIBRARIES["libgl"] + "*", "libGL.so*")
@@ -64,6 +66,7 @@ def test_a_missing_gl_library_is_named_in_one_line_with_its_package(tmp_path):
     assert not (tmp_path / "s.png").exists()
 
 
+@pytest.mark.spawns
 @pytest.mark.seat
 @pytest.mark.parametrize("stage", stage_names())
 def test_every_stage_renders_grades_and_demos_without_x(stage, tmp_path):

@@ -29,6 +29,7 @@ def measured(rows: int = 3) -> dict:
             "params": {"scene": "a test"}, "gl_renderer": "a test renderer"}
 
 
+@pytest.mark.spawns
 def test01_a_record_round_trips(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(records, "RECORDS", tmp_path)
     path = records.write_record("whitted", measured(), command="cs451 slides record whitted", repeats=3, quick=False)

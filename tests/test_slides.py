@@ -189,6 +189,7 @@ def test04_the_wheel_and_the_package_data_hold_the_vendored_files_and_templates(
     assert re.search(r'KIT_PARTS = \([^)]*"slides"', setup), "an installed kit carries the decks"
 
 
+@pytest.mark.spawns
 def test05_a_release_for_students_has_no_slides(tmp_path, monkeypatch):
     from cs451.packaging import release
     monkeypatch.setattr(release, "export_answers", lambda *a, **k: None)   # what is copied, not the answers
@@ -412,6 +413,7 @@ def check_deck(browser: Chromium, name: str, path: Path) -> None:
     page.call("Page.close")
 
 
+@pytest.mark.spawns
 @needs_chromium
 def test13_every_deck_opens_offline_and_every_slide_renders(built, browser):
     for name, path in built.items():
@@ -535,6 +537,7 @@ SCREENSHOTS = (("overview", "h2", "Five stages, one road"), ("overview", "figure
                ("radiosity", "figure", "radiosity-progress"), ("radiosity", "figure", "bench-radiosity"))
 
 
+@pytest.mark.spawns
 @pytest.mark.slow
 @needs_chromium
 def test18_the_decks_with_the_real_figures_open_offline_and_show_them(tmp_path, browser):

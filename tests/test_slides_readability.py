@@ -141,6 +141,7 @@ def chromium():
         yield browser
 
 
+@pytest.mark.spawns
 @needs_chromium
 def test07_every_deck_meets_the_floors_at_1080p_and_720p(stub_decks, chromium):
     report = {}
@@ -199,6 +200,7 @@ def test08_a_deck_that_breaks_the_floors_is_caught_on_the_page(tmp_path, monkeyp
     assert any("01-bad.md:17 (1280×720)" in p and "under the navigation controls" in p for p in small.problems)
 
 
+@pytest.mark.spawns
 @needs_chromium
 def test09_slides_pdf_writes_a_real_pdf_with_a_page_per_slide_and_nothing_blank(tmp_path, monkeypatch, capsys):
     pdfium = pytest.importorskip("pypdfium2", reason="the dev extra installs pypdfium2 to read the PDF back")

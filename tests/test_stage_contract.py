@@ -59,6 +59,7 @@ def relies_on(tests: list) -> dict[str, set[str]]:
     return {t.number: closure(set(t.depends_on)) for t in tests}
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("stage", STAGES)
 def test_the_reference_scores_full_marks(stage, reference_grade_of):
     result = reference_grade_of(stage)
@@ -66,6 +67,7 @@ def test_the_reference_scores_full_marks(stage, reference_grade_of):
     assert failed == [] and result.score == result.max_score == 100
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("stage", STAGES)
 def test_the_starter_scores_zero_with_a_hint_per_test(stage):
     result = grade(stage, "starter", show_progress=False)
@@ -74,6 +76,7 @@ def test_the_starter_scores_zero_with_a_hint_per_test(stage):
         assert "not implemented yet" in r.verdict.message, (r.test.number, r.verdict.message)
 
 
+@pytest.mark.spawns
 @pytest.mark.slow
 @pytest.mark.parametrize("stage, task", [(s, t.id) for s in STAGES for t in get_stage(s).tasks])
 def test_a_task_stubbed_alone_loses_only_its_points(stage, task, make_submission, reference_grade_of):

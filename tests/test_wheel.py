@@ -36,6 +36,7 @@ def wheel(tmp_path_factory) -> Path:
     return next(out.glob("*.whl"))
 
 
+@pytest.mark.spawns
 def test_the_wheel_carries_the_kit_beside_the_engine_and_no_litter(wheel):
     names = zipfile.ZipFile(wheel).namelist()
     tops = {n.split("/")[0] for n in names}
@@ -69,6 +70,7 @@ def _cs451(venv_python: Path, *args: str, cwd: Path) -> subprocess.CompletedProc
                           text=True, timeout=600)
 
 
+@pytest.mark.spawns
 def test_the_installed_command_renders_and_grades_away_from_the_checkout(wheel, tmp_path):
     python = _venv(tmp_path / "venv", borrow=True)
     subprocess.run([str(python), "-m", "pip", "install", "-q", "--no-deps", str(wheel)], check=True, timeout=300)
@@ -97,6 +99,7 @@ except Exception:
 """
 
 
+@pytest.mark.spawns
 @pytest.mark.slow
 def test_a_fresh_venv_installs_the_wheel_and_grades_a_folder_in_the_sandbox(wheel):
     top = world_readable_dir("cs451-wheel-")

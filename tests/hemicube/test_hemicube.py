@@ -105,6 +105,7 @@ def test06_truth_quotes_are_what_the_tests_expect():
     assert round(truth.howell_c11(1, 1, 1), 5) == 0.19982 and round(truth.howell_c14(1, 1, 1), 5) == 0.20004
 
 
+@pytest.mark.spawns
 @pytest.mark.slow
 @pytest.mark.parametrize("file, old, new, task, message", [
     ("tables.py", "top = area / (np.pi * (x * x + y * y + 1.0) ** 2)", "top = area / (np.pi * (x * x + y * y + 1.0))", "H1", "cell"),

@@ -59,6 +59,7 @@ def shown(d: HemicubeDemo, patch: int) -> HemicubeDemo:
     return d
 
 
+@pytest.mark.spawns
 def test01_the_sweep_writes_a_frame_per_patch(run):
     frames = sorted((run / "frames").glob("hemicube-*.png"))
     assert len(frames) == len(QUADS) == 16
@@ -137,6 +138,7 @@ def test05_keys_step_patches_and_change_settings(demo):
     assert d.resolution == 128 and d.painted_row().sum() == pytest.approx(fixed, abs=1e-12)
 
 
+@pytest.mark.spawns
 @needs_xvfb
 def test06_the_window_shows_the_headless_frame(run, tmp_path):
     shot = tmp_path / "shot.png"
@@ -182,6 +184,7 @@ LIVE = textwrap.dedent("""
 """)
 
 
+@pytest.mark.spawns
 @needs_xvfb
 def test07_a_live_window_answers_keys_and_clicks_and_escape_quits(tmp_path):
     seen = live_window_result(LIVE, KIT_ROOT / "reference" / "hemicube", tmp_path)

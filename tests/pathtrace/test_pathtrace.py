@@ -87,18 +87,18 @@ def test04_the_direct_light_mean_is_lamberts_formula():
     assert np.allclose(got, want, rtol=0.02), (got, want)          # 20,000 samples: about 0.5% of noise
 
 
-def test05_the_bench_writes_its_table_and_plot_and_the_noise_falls_with_samples(tmp_path):
-    env = {"PATH": str(Path(sys.executable).parent), "HOME": str(tmp_path)}
-    done = subprocess.run([str(Path(sys.executable).parent / "cs451"), "bench", "pathtrace", "--quick", "-o",
-                           str(tmp_path)], capture_output=True, text=True, cwd=KIT_ROOT, env=env, timeout=900)
+@pytest.mark.spawns
+def test05_the_bench_writes_its_table_and_plot_and_the_noise_falls_with_samples(bench_run):
+    folder, done = bench_run("pathtrace")                  # the session's one run of cs451 bench pathtrace --quick
     assert done.returncode == 0, done.stderr[-2000:]
     import json
-    result = json.loads((tmp_path / "pathtrace.json").read_text())
+    result = json.loads((folder / "pathtrace.json").read_text())
     traced = [r for r in result["rows"] if r["method"] == "path tracing"]
-    assert (tmp_path / "pathtrace.png").is_file() and len(traced) == 2
+    assert (folder / "pathtrace.png").is_file() and len(traced) == 2
     assert traced[1]["pixel_error"] < 0.75 * traced[0]["pixel_error"], traced     # 4x the samples: about half the noise
 
 
+@pytest.mark.spawns
 def test06_a_scene_this_stage_cannot_light_is_refused_in_one_line(tmp_path):
     import json
     from cs451.scene import BUNDLED_DIR

@@ -275,6 +275,7 @@ def test09_against_mitsuba_adaptive_has_less_error_where_the_shadows_are():
     assert adaptive["errors"]["image"] < uniform["errors"]["image"]
 
 
+@pytest.mark.spawns
 def test10_the_mesh_figure_and_table_are_the_kits_own(tmp_path):
     """The handout shows the bench's figure in a kit block, the bench writes it there; a student's release has neither."""
     from cs451 import KIT_ROOT

@@ -163,6 +163,7 @@ LIVE = textwrap.dedent("""
 """)
 
 
+@pytest.mark.spawns
 @needs_xvfb
 def test06_the_keys_reach_it_in_a_live_window(tmp_path):
     seen = live_window_result(LIVE, KIT_ROOT / "reference" / "radiosity", tmp_path)

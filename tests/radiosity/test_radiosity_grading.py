@@ -37,6 +37,7 @@ def reference_grade(reference_grade_of):
     return reference_grade_of("radiosity")
 
 
+@pytest.mark.spawns
 @pytest.mark.slow
 @pytest.mark.parametrize("file,old,new,lost", [
     ("patches.py", "cells = np.stack([grid[:-1, :-1], grid[:-1, 1:], grid[1:, 1:], grid[1:, :-1]], axis=2)",
@@ -81,6 +82,7 @@ def test05_demo_writes_frames_and_an_animation(tmp_path):
     assert not np.array_equal(first, second)                      # a shot later
 
 
+@pytest.mark.spawns
 @pytest.mark.skipif(shutil.which("xvfb-run") is None, reason="needs Xvfb (xvfb-run) for a window without a display")
 def test05b_demo_window_shows_frames_under_xvfb(tmp_path):
     done = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 1024x768x24", sys.executable, "-m", "cs451", "demo",
@@ -90,6 +92,7 @@ def test05b_demo_window_shows_frames_under_xvfb(tmp_path):
     assert not list(tmp_path.iterdir()), "a window demo writes no files"
 
 
+@pytest.mark.spawns
 @pytest.mark.slow
 def test06_cli_renders_the_cornell_box(tmp_path):
     out = tmp_path / "r.png"
@@ -103,6 +106,7 @@ def test06_cli_renders_the_cornell_box(tmp_path):
     assert "converged" in done.stderr and "rows computed" in done.stderr
 
 
+@pytest.mark.spawns
 @pytest.mark.slow
 def test07_bench_writes_its_table_json_and_plot(tmp_path):
     done = subprocess.run([sys.executable, "-m", "cs451", "bench", "radiosity", "--quick", "-o", str(tmp_path)],

@@ -128,7 +128,7 @@ def test06_the_option_costs_the_whole_matrix_in_the_estimate():
     on = R.STAGE.estimate(parse_scene(data, "on"))[0]
     data["options"]["radiosity"]["reciprocity"] = False
     off = R.STAGE.estimate(parse_scene(data, "off"))[0]
-    geometry = R.PATCH_BYTES * R.patch_count(parse_scene(data, "off"), 0.25)
+    geometry = R.cost.PATCH_BYTES * R.cost.patch_count(parse_scene(data, "off"), 0.25)
     assert on.bytes - geometry == pytest.approx((1 + MATRICES) * (off.bytes - geometry))
     assert "reciprocity" in on.what and "reciprocity" not in off.what
 

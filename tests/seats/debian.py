@@ -27,6 +27,10 @@ CONFIG_FILES = ("/etc/apt/sources.list.d/debian.sources", "/etc/apt/apt.conf.d/9
                 "/etc/xdg/pip/constraints.txt", "/root/.config/pip/pip.conf", "/etc/ssl/certs/ca-certificates.crt")
 #: Local package folders the pip configuration points at, bound read-only inside.
 PACKAGE_DIRS = ("/opt/wheels", "/opt/pypi", "/opt/pypi-more")
+#: What a new machine downloads again on every run, kept between runs (host folder under CACHE, where inside): apt's
+#: archive of .deb files and pip's of wheels. Only downloads are kept: every package is still installed by the
+#: README's set-up, in a fresh root, as on a new machine; a warm cache changes how long that takes, not what it does.
+DOWNLOAD_CACHES = (("apt-archives", "/var/cache/apt/archives"), ("pip", "/root/.cache/pip"))
 ENTER = Path(__file__).with_name("enter-root.sh")
 
 
@@ -118,6 +122,11 @@ class Machine:
     def run(self, script: str, timeout: float = 3600) -> subprocess.CompletedProcess:
         """``bash -c script`` inside, as root, with only HOME, PATH, LANG and TERM set; output captured."""
         binds = " ".join(d for d in PACKAGE_DIRS if Path(d).is_dir())
+        caches = []
+        for name, inside in DOWNLOAD_CACHES:
+            host = CACHE / "downloads" / f"{SUITE}-{_recipe_digest()}" / name
+            (host / "partial" if name == "apt-archives" else host).mkdir(parents=True, exist_ok=True)
+            caches.append(f"{host}={inside}")
         return subprocess.run(["unshare", "--mount", "--pid", "--fork", "--propagation", "private",
-                               "sh", str(ENTER), str(self.lower), str(self.top), binds, script],
+                               "sh", str(ENTER), str(self.lower), str(self.top), binds, " ".join(caches), script],
                               capture_output=True, text=True, timeout=timeout)

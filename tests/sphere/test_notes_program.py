@@ -94,6 +94,7 @@ def _kit_render(tmp_path: Path, size: tuple[int, int]) -> np.ndarray:
     return np.asarray(Image.open(out).convert("RGB"), dtype=np.float64) / 255.0
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("size", SIZES, ids=[f"{w}x{h}" for w, h in SIZES])
 def test01_cs451_render_sphere_matches_the_notes_program(notes_frames, tmp_path, size):
     notes, kit = notes_frames["notes"][size], _kit_render(tmp_path, size)

@@ -47,6 +47,7 @@ SCRIPT = textwrap.dedent("""
 """)
 
 
+@pytest.mark.spawns
 def test_the_demo_window_is_the_notes_window_and_q_quits(tmp_path):
     if not shutil.which("xvfb-run") or not shutil.which("xwininfo"):
         pytest.skip("needs xvfb (xvfb-run) and x11-utils (xwininfo)")

@@ -35,6 +35,7 @@ def load_in_a_new_process(folder: Path) -> subprocess.CompletedProcess:
                           text=True, timeout=300)
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("how", ["cp -a", "mv"])
 def test_a_copied_or_moved_package_loads_its_kernels(tmp_path, how):
     original = tmp_path / "mine" / "whitted"

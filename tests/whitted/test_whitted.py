@@ -175,6 +175,7 @@ def _points_by_task(result):
     return out
 
 
+@pytest.mark.spawns
 @pytest.mark.slow
 @pytest.mark.parametrize("file, old, new, task, also", [
     ("camera.py", "y = (1.0 - 2.0 * (np.arange(height) + 0.5) / height) * tan_y",

@@ -53,6 +53,7 @@ def picture(frame: np.ndarray, zoom: int) -> np.ndarray:
     return frame[:H * zoom:zoom, :W * zoom:zoom]
 
 
+@pytest.mark.spawns
 def test01_frames_refine_coarse_to_fine_and_end_on_the_render(run):
     frames = sorted((run / "frames").glob("whitted-*.png"))
     with Image.open(run / "frames" / "whitted.gif") as gif:
@@ -131,6 +132,7 @@ def test03_the_ray_tree_is_what_w11_cast_for_that_pixel():
     assert demo.tree is None and not np.array_equal(demo.frame(), with_tree)
 
 
+@pytest.mark.spawns
 @needs_xvfb
 def test04_the_window_shows_the_headless_frame(run, tmp_path):
     shot = tmp_path / "shot.png"
@@ -174,6 +176,7 @@ LIVE = textwrap.dedent("""
 """)
 
 
+@pytest.mark.spawns
 @needs_xvfb
 def test05_a_live_window_answers_keys_and_clicks_and_q_quits(tmp_path):
     seen = live_window_result(LIVE, KIT_ROOT / "reference" / "whitted", tmp_path)
@@ -183,6 +186,7 @@ def test05_a_live_window_answers_keys_and_clicks_and_q_quits(tmp_path):
     assert "s shadows" in seen["title"] and "click a pixel's ray tree" in seen["title"], seen["title"]
 
 
+@pytest.mark.spawns
 @pytest.mark.parametrize("args, option", [
     (["whitted", "--frames", "0"], "--frames"),
     (["whitted", "--no-window", "--screenshot", "x.png"], "--screenshot"),
@@ -195,12 +199,14 @@ def test06_bad_options_are_one_line_naming_the_option(args, option, tmp_path):
     assert done.returncode == 2 and option in done.stderr and done.stderr.count("\n") == 1, done.stderr
 
 
+@pytest.mark.spawns
 def test07_the_starter_stops_at_its_first_unwritten_task_in_one_line(tmp_path):
     done = cs451("demo", "whitted", "--impl", "starter", "--size", SIZE, "-o", str(tmp_path), timeout=120)
     assert done.returncode == 2 and "W1 camera_rays() is not implemented yet" in done.stderr
     assert done.stderr.count("\n") == 1
 
 
+@pytest.mark.spawns
 @pytest.mark.slow
 def test08_full_size_demo_ends_on_cs451_render(tmp_path):
     """At the scene's own size `cs451 render` traces one large batch, the demo pieces sized by time (both through the

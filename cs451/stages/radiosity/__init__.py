@@ -22,7 +22,7 @@ from typing import Any, Callable, Iterator
 import numpy as np
 
 from ... import patching, viewing
-from . import display as drawing, highlight as glossy, solvers   # `display`, `specular`: names used below
+from . import cost, display as drawing, highlight as glossy, solvers   # `display`, `specular`: names used below
 from ...patching import Patches
 from ...errors import KitError
 from .solvers import MatrixRows, Solution, solve_direct, shooting_matrix
@@ -412,39 +412,6 @@ def run_demo(module: Any, output: Path, window: bool, frames: int | None) -> lis
     return run(module, output, window, frames)
 
 
-#: bytes per patch beyond its row of form factors: geometry, solver state, vertices (with margin)
-PATCH_BYTES = 4096
-
-
-def patch_count(scene: Scene, patch_size: float) -> float:
-    """How many patches R1's rule (handout §R1: ⌈longest opposite edge / max_edge⌉ each way) makes of the scene."""
-    from ...patches import scene_polygons
-    quads, _, _ = scene_polygons(scene)
-    if patch_size <= 0:
-        return float(len(quads))
-    edge = lambda a, b: np.linalg.norm(quads[:, a] - quads[:, b], axis=1)
-    nu = np.maximum(1, np.ceil(np.maximum(edge(1, 0), edge(2, 3)) / patch_size))
-    nv = np.maximum(1, np.ceil(np.maximum(edge(3, 0), edge(2, 1)) / patch_size))
-    return float((nu * nv).sum())
-
-
-def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
-    """The memory a render needs, from the options alone: the patches R1's rule makes with their n × n form factors
-    (more matrices with reciprocity), and the hemicubes drawn at a time."""
-    from .reciprocity import MATRICES
-    from ...limits import Cost
-    from ..hemicube import hemicube_bytes
-    opts = STAGE.options(scene)
-    n = patch_count(scene, opts.patch_size)
-    batch = 1 if opts.solver == "progressive" and not opts.reciprocity else 256
-    matrices = 1 + MATRICES if opts.reciprocity else 1       # the engine's rows, and the correction's arrays
-    return [Cost("options.radiosity.patch_size", 8.0 * matrices * n * n + PATCH_BYTES * n,
-                 f"{n:,.0f} patches and their form factors (patch_size {opts.patch_size:g}"
-                 f"{', reciprocity: ' + str(matrices) + ' matrices' if opts.reciprocity else ''})"),
-            Cost("options.radiosity.resolution", hemicube_bytes(opts.resolution, batch),
-                 f"{batch} hemicube(s) of resolution {opts.resolution} at a time")]
-
-
 def handout_diagrams() -> dict:
     """The handout's picture of the glossy box without and with its highlight (:mod:`cs451.stages.radiosity.diagrams`)."""
     return part(__name__, "diagrams").PICTURES
@@ -463,7 +430,7 @@ STAGE = Stage(
     builds_on=("hemicube",),
     options_type=RadiosityOptions,
     draws=(Polygon, AreaLight),
-    estimate=estimate,
+    estimate=cost.estimate,
     diagrams=handout_diagrams,
 )
 

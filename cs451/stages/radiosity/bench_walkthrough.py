@@ -1,6 +1,7 @@
 """``cs451 bench walkthrough``: one radiosity solve serves every view; a path tracer pays for each.
 
-A camera walks 30 views around the Cornell box's open side (6 with ``--quick``). The kit solves once and draws
+A camera walks 30 views around the Cornell box's open side (``--quick``: 2 views against a truth of 64 spp, to show
+it runs). The kit solves once and draws
 each view; Mitsuba 3's path tracer (``scalar_rgb``, an optional peer) renders each view at a few sample counts.
 Both are compared per view with a converged Mitsuba render of that view (the truth), wall by wall (mean radiance
 over each wall's pixels away from its edges, :func:`cs451.stages.radiosity.bench_peer.wall_means`): the table gives each method's
@@ -68,7 +69,8 @@ def main(output: Path, quick: bool = False) -> dict | None:
     except ImportError:
         print("Mitsuba 3 is not installed (pip install -e '.[peers]'): the walkthrough needs it for its truth")
         return None
-    cameras = views(6 if quick else 30)
+    cameras = views(2 if quick else 30)
+    truth_spp = TRUTH_SPP // 8 if quick else TRUTH_SPP          # quick: shows it runs, measures nothing
     base = load_scene("cornell-box")
     scenes = [dataclasses.replace(base, camera=dataclasses.replace(base.camera, **dict(c))) for c in cameras]
     ref = load_impl(resolve_impl("reference", "radiosity"), "radiosity")
@@ -84,14 +86,14 @@ def main(output: Path, quick: bool = False) -> dict | None:
     draw_seconds = time.perf_counter() - start
 
     print(f"walkthrough of the Cornell box: {len(scenes)} views at {SIZE[0]}×{SIZE[1]}; truth: Mitsuba 3 at "
-          f"{TRUTH_SPP} spp per view")
+          f"{truth_spp} spp per view")
     rows = {"radiosity (one solve, a draw per view)": {"seconds": solve_seconds + draw_seconds, "errors": []}}
     for spp in CANDIDATE_SPP:
         rows[f"Mitsuba 3, {spp} spp per view"] = {"seconds": 0.0, "errors": [], "spp": spp}
     truth_seconds = 0.0
     for scene, camera, ours in zip(scenes, cameras, kit_images):
         ids = polygon_ids(scene, SIZE)
-        truth = mitsuba_reference("cornell-box", SIZE, TRUTH_SPP, 64, camera)
+        truth = mitsuba_reference("cornell-box", SIZE, truth_spp, 64, camera)
         truth_seconds += truth["seconds"]
         rows["radiosity (one solve, a draw per view)"]["errors"].append(wall_errors(ours, truth["image"], ids))
         for spp in CANDIDATE_SPP:
@@ -101,7 +103,7 @@ def main(output: Path, quick: bool = False) -> dict | None:
             row["seconds"] += time.perf_counter() - start
             row["errors"].append(wall_errors(theirs, truth["image"], ids))
     print(f"{'method':40s} {'total s':>8s} {'worst wall':>10s} {'mean |err|':>10s} {'spp for 1%':>10s}")
-    report = {"views": len(scenes), "size": list(SIZE), "truth_spp": TRUTH_SPP, "truth_seconds": truth_seconds,
+    report = {"views": len(scenes), "size": list(SIZE), "truth_spp": truth_spp, "truth_seconds": truth_seconds,
               "solve_seconds": solve_seconds, "draw_seconds": draw_seconds, "methods": {}}
     for name, row in rows.items():
         errs = np.array([abs(e) for view in row["errors"] for e in view.values()])

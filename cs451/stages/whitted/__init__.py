@@ -18,8 +18,7 @@ from ...errors import KitError
 from ...scene import AreaLight, Camera, Mesh, Plane, PointLight, Polygon, Scene, Sphere, parse_scene
 from ...schema import Context
 from ..base import Out, Probes, Stage, Task, as_array, functions_replaced, part
-from . import tolerances
-from . import cost
+from . import cost, trusted
 from .options import MAX_DEPTH, WhittedOptions
 
 RAYS = "len(origins)"
@@ -113,112 +112,6 @@ def render(scene: Scene, impl: Any, size: tuple[int, int] | None = None, **opts:
     return render_traced(scene, impl, size, **opts)[0]
 
 
-# --- trusted parts for the tests of later tasks ---------------------------------------
-#
-# A test of W5 or W11 should judge that task, not the earlier ones it calls. The grader runs the
-# reference first (through ``given``) and hands the submission arrays: the camera rays, the
-# reference's hierarchy, and the reference's answers to reflect, refract and fresnel for the
-# queries its own trace made. While the submission's trace runs, its W8 to W10 are answered from
-# those arrays wherever it asks what the reference asked (a correct trace asks exactly that), and
-# left to the submission's own functions elsewhere: a bug in W8 then costs W8's points only.
-
-BVH_GIVEN = {k: f"bvh_{k}" for k in tracescene.BVH_KEYS}
-#: Per optics task: the per-ray arrays of a query and of its answer (given as answer_<function>_<name>),
-#: and whether each holds a vector (3 columns) per ray.
-OPTICS = {"W8": ((("d", 3), ("n", 3)), (("r", 3),)), "W9": ((("d", 3), ("n", 3), ("eta", 1)), (("t", 3), ("tir", 1))),
-          "W10": ((("cos", 1), ("eta", 1)), (("f", 1),))}
-#: Queries match when they agree to this, after rounding (the stage's table says why).
-ANSWER_DIGITS = tolerances.ANSWER_DIGITS
-
-
-def _given_bvh(given: dict[str, np.ndarray]) -> dict[str, np.ndarray] | None:
-    if not all(name in given for name in BVH_GIVEN.values()):
-        return None
-    return {k: given[name] for k, name in BVH_GIVEN.items()}
-
-
-def _query(task: str, args: tuple) -> tuple[np.ndarray, list[np.ndarray]]:
-    """One row per ray of what an optics call asks, as floats (the key), and the arguments broadcast per ray.
-
-    Raises ValueError for a call that is not a batch of rays as the interface has it ((n,) or (n, 3) arrays).
-    """
-    if task == "W10":
-        cos = np.asarray(args[0], dtype=np.float64)
-        if cos.ndim != 1:
-            raise ValueError("not a batch")
-        eta = np.broadcast_to(np.asarray(args[1], dtype=np.float64), cos.shape)
-        return np.column_stack([cos, eta]), [cos, eta]
-    d = np.asarray(args[0], dtype=np.float64)
-    n = np.asarray(args[1], dtype=np.float64)
-    if d.ndim != 2 or d.shape[1:] != (3,) or n.shape != d.shape:
-        raise ValueError("not a batch")
-    if task == "W8":  # the mirror direction is the same about -n: key the normal facing the ray
-        facing = np.where((np.einsum("ij,ij->i", d, n) > 0)[:, None], -n, n)
-        return np.column_stack([d, facing]), [d, n]
-    eta = np.broadcast_to(np.asarray(args[2], dtype=np.float64), (len(d),))
-    return np.column_stack([d, n, eta]), [d, n, eta]
-
-
-def _keys(rows: np.ndarray) -> list[bytes]:
-    return [r.tobytes() for r in np.round(rows / ANSWER_DIGITS).astype(np.int64)]
-
-
-class _Answers:
-    """The reference's answers to one optics task, looked up by query."""
-
-    def __init__(self, task: str, queries: list[np.ndarray], answers: list[np.ndarray]):
-        self.task, self.answers = task, answers
-        self.index = {k: i for i, k in enumerate(_keys(_query(task, tuple(queries))[0]))}
-
-    def wrap(self, own: Any) -> Any:
-        def answered(*args: Any) -> Any:
-            try:
-                query, per_ray = _query(self.task, args)
-            except (TypeError, ValueError, IndexError):
-                return own(*args)               # not a batch of rays: the submission's own answer
-            found = np.array([self.index.get(k, -1) for k in _keys(query)], dtype=np.int64)
-            missing = found < 0
-            parts = [a[found[~missing]] for a in self.answers]
-            if missing.any():                   # rays the reference never cast: the submission's own function
-                mine = own(*[a[missing] for a in per_ray])
-                mine = mine if isinstance(mine, (tuple, list)) else (mine,)
-                parts = [_merge(p, np.asarray(m), missing) for p, m in zip(parts, mine)]
-            return tuple(parts) if len(parts) > 1 else parts[0]
-        return answered
-
-
-def _merge(found: np.ndarray, mine: np.ndarray, missing: np.ndarray) -> np.ndarray:
-    out = np.zeros((len(missing),) + found.shape[1:], dtype=np.result_type(found, mine))
-    out[~missing], out[missing] = found, mine
-    return out
-
-
-def _answer_names(task: str) -> tuple[list[str], list[str]]:
-    name = STAGE.task(task).function
-    queries, results = OPTICS[task]
-    return [f"answer_{name}_{q}" for q, _ in queries], [f"answer_{name}_{r}" for r, _ in results]
-
-
-def _answers_from(given: dict[str, np.ndarray]) -> dict[str, _Answers]:
-    out = {}
-    for task in OPTICS:
-        queries, results = _answer_names(task)
-        if all(k in given for k in queries + results):
-            out[task] = _Answers(task, [given[k] for k in queries], [np.asarray(given[k]) for k in results])
-    return out
-
-
-def _recorder(task: str, log: dict[str, list]) -> Callable[[Any], Any]:
-    def wrap(own: Any) -> Any:
-        def recording(*args: Any) -> Any:
-            out = own(*args)
-            _, per_ray = _query(task, args)
-            log[task].append((per_ray, out if isinstance(out, (tuple, list)) else (out,)))
-            return out
-        return recording
-    return wrap
-
-
 # --- probes: what the autograder's worker asks a submission for ------------------
 
 PROBES = Probes()
@@ -305,7 +198,7 @@ def probe_hit_parts(impl: Any, scene: dict, size: list[int] | None = None, hiera
     ts = prepare(_scene(scene), impl, hierarchy=hierarchy, **opts)
     out = probe_primary_rays(impl, scene, size) if size is not None else {}
     if ts.bvh is not None:
-        out.update({BVH_GIVEN[k]: np.asarray(v) for k, v in ts.bvh.items()})
+        out.update({trusted.BVH_GIVEN[k]: np.asarray(v) for k, v in ts.bvh.items()})
     return out
 
 
@@ -314,11 +207,11 @@ def probe_trace_parts(impl: Any, scene: dict, size: list[int], **opts: Any) -> d
     """Trusted inputs of a W11 test (run on the reference only): those of :func:`probe_hit_parts`, and every
     query the reference's trace put to reflect, refract and fresnel on this scene, with its answers."""
     out = probe_hit_parts(impl, scene, size, **opts)
-    log: dict[str, list] = {task: [] for task in OPTICS}
-    with functions_replaced(STAGE, impl, {task: _recorder(task, log) for task in OPTICS}):
+    log: dict[str, list] = {task: [] for task in trusted.OPTICS}
+    with functions_replaced(STAGE, impl, {task: trusted.recorder(task, log) for task in trusted.OPTICS}):
         probe_render(impl, scene, size, **opts, **out)
-    for task, (queries, results) in OPTICS.items():
-        query_names, result_names = _answer_names(task)
+    for task, (queries, results) in trusted.OPTICS.items():
+        query_names, result_names = trusted.answer_names(task)
         for side, spec, names in ((0, queries, query_names), (1, results, result_names)):
             for k, ((_, columns), name) in enumerate(zip(spec, names)):
                 parts = [np.asarray(call[side][k]).reshape(-1, columns) for call in log[task]]
@@ -333,7 +226,7 @@ def probe_closest_hit(impl: Any, scene: dict, size: list[int] | None = None, hie
                       directions: np.ndarray | None = None, **given: np.ndarray) -> dict[str, np.ndarray]:
     """Closest hits of the given rays (``rays`` in the parameters, or trusted camera rays as inputs), through
     the trusted hierarchy when the test gives one."""
-    ts = prepare(_scene(scene), impl, hierarchy=hierarchy, bvh=_given_bvh(given))
+    ts = prepare(_scene(scene), impl, hierarchy=hierarchy, bvh=trusted.given_bvh(given))
     if rays is not None:
         origins, directions = _rays(rays["origins"], "origins"), _rays(rays["directions"], "directions")
     assert origins is not None and directions is not None
@@ -400,10 +293,10 @@ def probe_render(impl: Any, scene: dict, size: list[int], origins: np.ndarray | 
     given = {k: opts.pop(k) for k in list(opts) if k.startswith(("bvh_", "answer_"))}
     sc = _scene(scene)
     width, height = size
-    ts = prepare(sc, impl, bvh=_given_bvh(given), **opts)
+    ts = prepare(sc, impl, bvh=trusted.given_bvh(given), **opts)
     if origins is None or directions is None:
         origins, directions = _camera_rays(impl, sc.camera, width, height)
-    answers = _answers_from(given)
+    answers = trusted.answers_from(given)
     with functions_replaced(STAGE, impl, {task: a.wrap for task, a in answers.items()}):
         colours = STAGE.call(impl, "W11", ts, origins, directions)
     out = {"image": colours.reshape(height, width, 3)}

@@ -86,7 +86,7 @@ def _timers(impl: ModuleType, ref, scene, ts, spp: int, mitsuba) -> tuple[dict, 
 def frames(impl: ModuleType, quick: bool, spp: int = 1) -> list[dict]:
     """One row per scene: seconds and rays per second of each column, on 1 and 2 threads, and the ratios."""
     ref = reference_parts(impl)
-    repeats = 3 if quick else 7
+    repeats = 1 if quick else 7
     rows = []
     names = ("whitted", "cornell-spheres", "rippled-torus")
     bar = Progress("whole frames", len(names) * repeats)
