@@ -257,7 +257,7 @@ EDITS = (
     ("docs/lecturers.md", "| pathtrace |", "| toy | 2 | 20 |"),
     ("docs/stages.md", None, "## Stage 6: a toy stage (`toy`)\n\nA colour scaled (T1), for the architecture test."),
     ("docs/testing.md", "| `tests/pathtrace/` |", "| `tests/toy/` | stage 6: none of its own |"),
-    ("tests/test_demo_screen.py", '"pathtrace": (', '    "toy": ("furnace", "160x120", 160),'),
+    ("tests/test_demo_screen.py", '"pathtrace": (', '    "toy": ("furnace", "400x300", 400),'),
 )
 
 

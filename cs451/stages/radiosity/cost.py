@@ -28,8 +28,8 @@ def estimate(scene: Scene, size: tuple[int, int] | None = None) -> list:
     """The memory a render needs, from the options alone: the patches R1's rule makes with their n × n form factors
     (more matrices with reciprocity), and the hemicubes drawn at a time."""
     from ..hemicube import hemicube_bytes              # the stage it builds on, when an estimate is asked for
-    from . import STAGE
-    opts = STAGE.options(scene)
+    from .. import get_stage                            # the registry: this package's interface imports this module
+    opts = get_stage("radiosity").options(scene)
     n = patch_count(scene, opts.patch_size)
     batch = 1 if opts.solver == "progressive" and not opts.reciprocity else 256
     matrices = 1 + MATRICES if opts.reciprocity else 1       # the engine's rows, and the correction's arrays

@@ -92,8 +92,8 @@ def _merge(found: np.ndarray, mine: np.ndarray, missing: np.ndarray) -> np.ndarr
 
 def answer_names(task: str) -> tuple[list[str], list[str]]:
     """The names a test gives an optics task's queries and answers under (``answer_<function>_<name>``)."""
-    from . import STAGE
-    name = STAGE.task(task).function
+    from .. import get_stage                            # the registry: this package's interface imports this module
+    name = get_stage("whitted").task(task).function
     queries, results = OPTICS[task]
     return [f"answer_{name}_{q}" for q, _ in queries], [f"answer_{name}_{r}" for r, _ in results]
 
