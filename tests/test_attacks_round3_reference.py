@@ -264,6 +264,9 @@ def test03_the_engine_a_worker_imports_holds_no_reference_no_tests_and_no_answer
         assert {f.parts[0] for f in texts} == {"cs451"}, sorted({f.parts[0] for f in texts})
         assert not [f for f in texts if f.name in ANSWER_FILES or f.suffix in (".npz", ".npy")
                     or KIT_FOLDERS & set(f.parts)]
+        from cs451 import ENGINE_DIR, instructor_only       # every stage's benchmarks, figures and speed layer
+        assert not [f for f in texts if instructor_only(ENGINE_DIR.parent / f)]
+        assert any(instructor_only(p) for p in ENGINE_DIR.glob("stages/*/bench*.py")), "no benchmark to leave out"
         tasks = {t.function for s in stage_names() for t in get_stage(s).tasks}
         defined = [f"{f}: {line.strip()}" for f, text in texts.items() for line in text.splitlines()
                    if line.strip().startswith("def ") and line.strip()[4:].split("(")[0] in tasks]

@@ -113,6 +113,8 @@ def test_the_release_holds_no_solution_no_hidden_test_and_no_truth(stage, tmp_pa
     assert not [f for f in files if f.startswith("reference/") or f.endswith(("hidden.py", "truth.py", "public.py"))]
     assert [f for f in files if f.startswith(f"autograder/{stage}/answers/")]
     assert f"{stage}/__init__.py" in files and ".github/workflows/classroom.yml" in files
+    from cs451 import ENGINE_DIR, instructor_only           # benchmarks, deck figures, speed layers: instructors'
+    assert not [f for f in files if f.startswith("cs451/") and instructor_only(ENGINE_DIR.parent / f)]
     starter = KIT_ROOT / "starter" / stage
     for path in starter.rglob("*.py"):
         assert (out / stage / path.relative_to(starter)).read_text() == path.read_text(), path.name

@@ -21,8 +21,8 @@ Three parts, printed as tables and written to ``hemicube.json`` and ``hemicube.p
    patches hide each other, against the area average (ray casting from random points): the plain
    hemicube, the proximity fix and the split shooter, timed.
 
-``--quick`` is a small run that shows every part works (the fast suite runs it): resolutions 16 to 64, the box cut
-2 × 2 against resolution 128, every fourth of Howell's configurations; its numbers are not the measurement.
+``--quick`` is a small run that shows every part works (the fast suite runs it): resolutions 16 to 64, the box's
+whole polygons against resolution 128, every fourth of Howell's configurations; its numbers are not the measurement.
 """
 from __future__ import annotations
 
@@ -222,8 +222,8 @@ def time_at_error(points: list[dict], error: float, extrapolate: bool = False) -
 
 def main(output: Path, quick: bool = False) -> None:
     """Run every part, print its tables and write ``hemicube.json`` and ``hemicube.png`` in ``output`` (``quick``, a
-    small run that shows every part works: resolutions to 64, every fourth of Howell's configurations at 32, a 2 × 2
-    box against a converged answer at 128)."""
+    small run that shows every part works: resolutions to 64, every fourth of Howell's configurations at 32, the
+    box's whole polygons against a converged answer at 128)."""
     output = Path(output)
     output.mkdir(parents=True, exist_ok=True)
     impl = _impl()
@@ -245,7 +245,7 @@ def main(output: Path, quick: bool = False) -> None:
     howell = family(impl, ctx, family_resolution, every=4 if quick else 1)
     print_family(howell, family_resolution)
 
-    k = 2 if quick else 8
+    k = 1 if quick else 8
     samples = [250, 1000] if quick else [250, 1000, 4000, 16000, 64000]
     box = cornell(impl, resolutions, 128 if quick else 1024, k, samples, ctx, fix_resolution=64 if quick else 128)
     n = box["patches"]
@@ -270,7 +270,7 @@ def main(output: Path, quick: bool = False) -> None:
         box["equal_error"] = []
         _finish(output, ctx, quick, forms, box, resolutions, howell)
         return
-    hidden = occluded(impl, [r for r in resolutions if r <= 512], ctx, (1,) if quick else (1, 4))
+    hidden = occluded(impl, [r for r in resolutions if r <= 512], ctx, (1,) if quick else (1, 4), quick=quick)
     print_occluded(hidden)
     box["occluded"] = hidden
     print("\nRay casting (Embree, cosine-weighted rays from each patch's centre), same scene, same error measure")

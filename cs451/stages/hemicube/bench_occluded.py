@@ -32,8 +32,9 @@ def _row_error(F: np.ndarray, ref: np.ndarray) -> float:
     return float(np.mean(np.abs(F[ok] - ref[ok]).sum(axis=1) / total[ok]))
 
 
-def occluded(impl, resolutions: list[int], ctx, subdivisions: tuple[int, ...] = (1, 4)) -> list[dict]:
-    """Rows of the Cornell box (each quad cut k × k for k in ``subdivisions``), every method, timed, with errors."""
+def occluded(impl, resolutions: list[int], ctx, subdivisions: tuple[int, ...] = (1, 4), quick: bool = False) -> list[dict]:
+    """Rows of the Cornell box (each quad cut k × k for k in ``subdivisions``), every method, timed, with errors
+    (``quick``: the proximity fix and the split shooter at the smallest resolution only)."""
     out = []
     for k in subdivisions:
         quads, _ = subdivide_uniform(scene_polygons(load_scene("cornell-box"))[0], k)
@@ -42,8 +43,9 @@ def occluded(impl, resolutions: list[int], ctx, subdivisions: tuple[int, ...] = 
         truth = formfactor_matrix_raycast(quads, TRUTH_RAYS, seed=11, rows=rows)
         truth_seconds = time.perf_counter() - t0
         methods = [("hemicube", r, dict(proximity="none")) for r in resolutions]
-        methods += [("proximity fix", r, dict(proximity="contour")) for r in resolutions if r <= 256]
-        methods += [("shooter split 4×4", 128, dict(proximity="none", shooter_split=4))]
+        fixed = resolutions[:1] if quick else [r for r in resolutions if r <= 256]
+        methods += [("proximity fix", r, dict(proximity="contour")) for r in fixed]
+        methods += [("shooter split 4×4", resolutions[0] if quick else 128, dict(proximity="none", shooter_split=4))]
         for name, res, kwargs in methods:
             ff = HemicubeFormFactors(quads, calls(impl), resolution=res, rotate=False, ctx=ctx, **kwargs)
             ff.tables, ff.renderer
