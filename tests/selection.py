@@ -10,8 +10,9 @@ true by watching.
 - **``spawns``**: the test starts another process (a grading sandbox, a console script, a compiler, a browser), so
   ``pytest -m "not spawns"`` runs in one process. The mark is checked while the tests run: a test that starts a
   process from the kit's own code (``cs451/``, ``tests/``, ``autograder/``, ``bench/``, ``reference/``) without it
-  fails, naming the mark. A library's own helper process (a font cache, say) does not count: it depends on the
-  machine, not on the test.
+  fails, naming the mark. Two kinds of process do not count, since whether they start depends on the machine or on
+  the tests before, not on the test: a library's own helper (a font cache, say), and the reference's answers
+  computed into the grader's cache.
 """
 from __future__ import annotations
 
@@ -79,9 +80,20 @@ def mark_and_select(config: pytest.Config, items: list[pytest.Item]) -> None:
         items[:] = kept
 
 
+#: Where a process started does not count: the reference's answers computed into the grader's cache (any test that
+#: reads an answer may fill the cache the first time, so whether it does depends on the tests run before it).
+CACHE_FILLS = (os.sep + os.path.join("cs451", "grading", "expected.py"),)
+
+
 def _own_caller() -> str | None:
-    """The first frame outside the process-starting machinery, if it is the kit's own code."""
+    """The first frame outside the process-starting machinery, if it is the kit's own code and no frame below it is
+    filling the answer cache."""
     frame = sys._getframe(2)
+    probe = frame
+    while probe is not None:
+        if probe.f_code.co_filename.endswith(CACHE_FILLS):
+            return None
+        probe = probe.f_back
     while frame is not None:
         name = frame.f_code.co_filename
         if not name.startswith(os.path.dirname(os.__file__)) and os.sep + "multiprocessing" + os.sep not in name:

@@ -55,7 +55,7 @@ def kit_with_toy_stage():
         (kit / rel).write_text(text)
     done = run([sys.executable, "-m", "cs451", "starter"], kit)
     assert done.returncode == 0, done.stderr
-    LISTS_BEFORE[kit] = run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-k", "test_every_list",
+    LISTS_BEFORE[kit] = run([sys.executable, "-m", "pytest", "-q", "-n", "0", "-p", "no:cacheprovider", "-k", "test_every_list",
                              "tests/test_stage_lists.py"], kit)
     for rel, anchor, line in EDITS:
         (kit / rel).write_text(apply_edit((kit / rel).read_text(), anchor, line))
@@ -86,14 +86,14 @@ def test_a_stage_left_out_of_a_list_of_stages_fails_a_test(kit_with_toy_stage):
 def test_the_toy_stage_passes_every_test_of_a_stage(kit_with_toy_stage):
     """Every stage-parametrised test of the contract, the handouts, the scene kinds, the demos and the benchmarks on
     the toy (slow ones too), every list of stages, and the deck showing a figure of the toy's own."""
-    done = run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-m", "slow or not slow", "-k", "toy",
+    done = run([sys.executable, "-m", "pytest", "-q", "-n", "0", "-p", "no:cacheprovider", "-m", "slow or not slow", "-k", "toy",
                 "tests/test_stage_contract.py", "tests/test_handout.py", "tests/test_scene_kinds.py",
                 "tests/test_demo_screen.py", "tests/test_benches.py"], kit_with_toy_stage)
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-2000:]
     summary = done.stdout.strip().splitlines()[-1]
     assert " passed" in summary and "failed" not in summary and "skipped" not in summary, summary
     assert int(summary.split(" passed")[0].split()[-1]) >= 13, summary  # 5 contract, 6 handout, 2 scene kinds, demo, bench
-    done = run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "tests/test_stage_lists.py",
+    done = run([sys.executable, "-m", "pytest", "-q", "-n", "0", "-p", "no:cacheprovider", "tests/test_stage_lists.py",
                 "tests/test_slides.py::test01_every_stage_s_deck_shows_a_figure_of_its_own"], kit_with_toy_stage)
     assert done.returncode == 0 and "failed" not in done.stdout, done.stdout[-3000:] + done.stderr[-2000:]
 

@@ -41,6 +41,9 @@ def test_the_warm_step_compiles_every_kernel_signature_the_whitted_demo_runs(sig
     from cs451.stages.whitted import accel
     from cs451.stages.whitted.accel.hierarchy import HIERARCHIES, LAYOUTS
     from cs451.stages.whitted.demo import WhittedDemo
+    accel.forget_compiled()                                          # as in a fresh process, whatever ran before
+    HIERARCHIES.clear()
+    LAYOUTS.clear()
     warm(["whitted"], stream=io.StringIO())
     warmed = set(signatures)
     signatures.clear()
