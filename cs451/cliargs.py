@@ -256,7 +256,8 @@ def _commands() -> argparse.ArgumentParser:
     b.add_argument("-o", "--output", default="bench-results",
                    help="folder for the JSON and plots (default: bench-results); the plots need "
                         "pip install 'cs451-kit[bench]' (matplotlib)")
-    b.add_argument("--quick", action="store_true", help="fewer repetitions")
+    b.add_argument("--quick", action="store_true", help="a small run that shows the benchmark works (the tests run every "
+                   "benchmark so), not a measurement")
     b.set_defaults(func=cmd_bench)
 
     sl = sub.add_parser("slides", help="build the lecture decks (slides/) into self-contained HTML",
