@@ -41,6 +41,16 @@ def instructor_only(path: Path) -> bool:
                                                          or parts[2].startswith(INSTRUCTOR_PREFIXES))
 
 
+def instructor_paths() -> list[Path]:
+    """The instructors-only folders and files this engine holds (:func:`instructor_only`): what a grading sandbox must
+    not read wherever the engine lies (a checkout the uid fallback can see, a wheel inside a bound environment)."""
+    found = [ENGINE_DIR / name for name in INSTRUCTOR_ONLY if (ENGINE_DIR / name).exists()]
+    stages = ENGINE_DIR / "stages"
+    for folder in sorted(p for p in stages.iterdir() if p.is_dir()) if stages.is_dir() else []:
+        found += [entry for entry in sorted(folder.iterdir()) if instructor_only(entry)]
+    return found
+
+
 def _kit_root() -> Path:
     """Where reference/, starter/, autograder/ and the handouts are.
 

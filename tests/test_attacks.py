@@ -22,7 +22,7 @@ from pathlib import Path
 
 import pytest
 
-from cs451 import KIT_ROOT
+from cs451 import ENGINE_DIR, KIT_ROOT
 from cs451.grading import sandbox
 from cs451.grading.roster import grade_roster
 from cs451.stages import stage_names
@@ -155,14 +155,22 @@ def secrets(gradescope) -> list[str]:
             str(KIT_ROOT / ".git" / "HEAD"), str(KIT_ROOT / ".cs451-cache"),
             str(kit / "reference" / "sphere" / "camera.py"), str(kit / "autograder" / "sphere" / "truth.py"),
             str(kit / ".cs451-cache"), str(gradescope[0] / "source"), str(Path.home() / HOME_SECRET),
-            "/etc/shadow"]
+            "/etc/shadow", *instructors_parts(ENGINE_DIR), *instructors_parts(kit / "cs451")]
+
+
+def instructors_parts(engine: Path) -> list[str]:
+    """An engine's instructors-only files, by path (no listing needed): a benchmark whose loop solves R3 (a fourth
+    round's attacker ran it under the uid fallback from a readable checkout), a deck figure, the speed layer."""
+    stages = engine / "stages"
+    return [str(stages / "radiosity" / "bench_substructuring.py"), str(stages / "radiosity" / "figures.py"),
+            str(stages / "whitted" / "accel" / "kernels.py")]
 
 
 def layout_secrets(gradescope) -> list[str]:
     """The secrets of the Gradescope layout alone (the uid-only fallback guards the kit it runs, not this checkout)."""
     kit = Path(gradescope[1]["CS451_HOME"])
     return [str(kit / "reference" / "sphere" / "camera.py"), str(kit / "autograder" / "sphere" / "hidden.py"),
-            str(kit / ".cs451-cache"), str(gradescope[0] / "source"), "/etc/shadow"]
+            str(kit / ".cs451-cache"), str(gradescope[0] / "source"), "/etc/shadow", *instructors_parts(kit / "cs451")]
 
 
 def assert_blocked(out: Outcome):

@@ -288,3 +288,24 @@ def test04_a_radiosity_probe_without_the_trusted_arrays_refuses_rather_than_comp
         radiosity.probe_render(ref, scene=scene, size=[16, 16])
     with pytest.raises(KitError, match="gives no trusted system"):
         radiosity.probe_render(ref, scene=scene, size=[16, 16], quads=np.zeros((1, 4, 3)))
+
+
+def test05_the_canary_names_an_engine_copy_holding_instructors_parts():
+    """A readable copy of the engine with a stage's benchmarks, deck figures or speed layer in it is a copy of code
+    that answers tasks: the canary names it (and the uid fallback then refuses to grade beside it)."""
+    from cs451.grading.canary import secret_in_parts
+    stages = set(stage_names())
+    for name in ("bench.py", "bench_substructuring.py", "figures.py", "figure_bench.py", "accel"):
+        assert secret_in_parts(("/", "tmp", "copy", "cs451", "stages", "radiosity", name), stages), name
+    for name in ("display.py", "solvers.py", "__init__.py", "bench.txt"):
+        assert secret_in_parts(("/", "tmp", "copy", "cs451", "stages", "radiosity", name), stages) is None, name
+
+
+def test06_every_instructors_part_of_the_engine_is_protected():
+    """Every benchmark, deck figure and speed layer of the engine is among what no sandbox may read: the uid fallback
+    refuses to grade where one is readable, and bubblewrap covers one inside a bound environment (a wheel)."""
+    from cs451 import ENGINE_DIR, instructor_only
+    parts = [p for p in ENGINE_DIR.rglob("*") if instructor_only(p) and not instructor_only(p.parent)
+             and "__pycache__" not in p.parts]
+    assert len([p for p in parts if p.name.startswith("bench")]) >= 5
+    assert set(parts) <= set(protected_paths())

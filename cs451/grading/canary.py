@@ -41,9 +41,13 @@ REGION = re.compile(rb"^[ \t]*# BEGIN SOLUTION [A-Z]+\d+[a-z]?\b[^\n]*\n(?P<body
 
 
 def secret_in_parts(parts: tuple[str, ...], stages: set[str]) -> str | None:
-    """Why a path (as its parts) is a copy of the kit's reference, hidden tests or answers, or None."""
+    """Why a path (as its parts) is a copy of the kit's reference, hidden tests or answers, or of the engine's
+    instructors-only parts (a stage's benchmarks, deck figures or speed layer, which would answer tasks), or None."""
     for i in range(len(parts) - 1):
         here, below = parts[i], parts[i + 1]
+        if here == "stages" and below in stages and i > 0 and parts[i - 1] == "cs451" and i + 2 < len(parts) \
+                and _instructors(parts[i + 2]):
+            return f"stage {below}'s {parts[i + 2]} (instructors only: benchmarks, figures and speed layers answer tasks)"
         if here == "reference" and below in stages and i + 2 < len(parts):
             return f"the reference of stage {below}"
         if here == "autograder" and below in stages and i + 2 < len(parts) and parts[i + 2] in ("hidden.py", "truth.py"):
@@ -51,6 +55,13 @@ def secret_in_parts(parts: tuple[str, ...], stages: set[str]) -> str | None:
         if here == ".cs451-cache" and below in ("reference", "truth"):
             return "a grader's answer cache"
     return None
+
+
+def _instructors(name: str) -> bool:
+    """Whether a name in a stage's package is one of the engine's instructors-only parts (:func:`cs451.instructor_only`)."""
+    from .. import INSTRUCTOR_FILES, INSTRUCTOR_PREFIXES, SPEED_LAYER
+    return name in INSTRUCTOR_FILES or name == SPEED_LAYER or (name.startswith(INSTRUCTOR_PREFIXES)
+                                                               and name.endswith(".py"))
 
 
 def solution_region(data: bytes) -> bool:

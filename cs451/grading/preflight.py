@@ -123,8 +123,8 @@ def run_canary(box: Sandbox) -> str | None:
     except (ValueError, IndexError):
         return f"the canary did not run ({done.output.strip()[-300:] or f'exit {done.returncode}'})"
     if answer["seen"]:
-        return (f"the sandbox user can read {', '.join(answer['seen'][:3])}; make those folders private "
-                f"(mode 0700) or install bubblewrap")
+        return (f"the sandbox user can read {', '.join(answer['seen'][:3])}; make those private "
+                f"(chmod go-rwx) or install bubblewrap")
     if answer["wrote"]:
         for folder in answer["wrote"][1:]:
             (Path(folder) / "cs451-canary").unlink(missing_ok=True)

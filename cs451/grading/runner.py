@@ -20,7 +20,7 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from .. import ENGINE_DIR, KIT_ROOT
+from .. import ENGINE_DIR, KIT_ROOT, instructor_paths
 from ..caches import cache_home
 from ..errors import KitError, SubmissionError
 from ..impl import resolve_impl
@@ -138,10 +138,13 @@ def _score(test: Test, verdict: Verdict) -> float:
 
 
 def protected_paths(extra: tuple[Path, ...] = ()) -> list[Path]:
-    """What no submission may read: the kit's reference, specs, tests, history and cached answers, and ``extra``."""
+    """What no submission may read: the kit's reference, specs, tests, history and cached answers, the engine's
+    instructors-only parts (every stage's benchmarks, deck figures and speed layer: they would answer tasks), and
+    ``extra``."""
     names = ("reference", "autograder", "starter", "tests", "bench", ".git", ".cs451-cache", "assignments")
     cache = cache_home()   # the user's, where the kit cannot be written: the answers are there then
-    return [KIT_ROOT / n for n in names] + ([cache] if cache != KIT_ROOT / ".cs451-cache" else []) + list(extra)
+    return ([KIT_ROOT / n for n in names] + ([cache] if cache != KIT_ROOT / ".cs451-cache" else []) + instructor_paths()
+            + list(extra))
 
 
 def engine_sources(stage: str) -> list[tuple[Path, str]]:

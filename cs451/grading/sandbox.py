@@ -146,6 +146,7 @@ class Sandbox:
         for pristine in (engine, self.run_dir / "upload"):   # copied afresh for each test (fresh_copies), never shown
             os.chmod(pristine, 0o700)
         (self.run_dir / "copies").mkdir(mode=0o711)
+        (self.run_dir / "nothing").touch(mode=0o000)   # bound over a protected file in a bound folder: no one opens it
         self.share = cgroups.create_share()
         if self.share is not None:
             self.share.enter()   # the grading of this submission, checks included, shares its CPU with its tests
@@ -371,8 +372,12 @@ class Sandbox:
                 args += ["--ro-bind", lib, lib]
                 bound.append(lib)
         for path in self.protected:   # a kit installed in the venv (a wheel) lies inside a bound prefix: cover it
-            if any(Path(path).is_relative_to(b) for b in bound) and os.path.isdir(path) and not os.path.islink(path):
+            if not any(Path(path).is_relative_to(b) for b in bound) or os.path.islink(path):
+                continue
+            if os.path.isdir(path):
                 args += ["--perms", "0000", "--tmpfs", str(path), "--remount-ro", str(path)]   # empty, no one may open
+            elif os.path.isfile(path):      # an instructors-only file of an engine installed there
+                args += ["--ro-bind", str(self.run_dir / "nothing"), str(path)]
         args += ["--ro-bind", str(engine), "/kit", "--ro-bind", str(upload), "/submission",
                  "--bind", str(job), "/job", "--remount-ro", "/dev", "--remount-ro", "/",   # nothing else writable
                  "--chdir", "/job", "--clearenv"]

@@ -7,8 +7,9 @@ elements, while the radiosity is resolved on the elements. The price is an appro
 a patch shoots its area-averaged unshot radiosity, from its centre, as if it were uniform.
 
 This is the benchmark's code (``cs451 bench radiosity``), which measures what that
-approximation costs in accuracy against what it saves in rows. It lives in bench/, not in
-the engine, because its shooting loop would solve task R3: nothing in bench/ reaches students.
+approximation costs in accuracy against what it saves in rows. Like every stage's benchmark it is
+instructors' only (:func:`cs451.instructor_only`: in no release, and hidden from every sandbox), because its
+shooting loop would solve task R3.
 """
 from __future__ import annotations
 
